@@ -1,0 +1,288 @@
+"""Known shapes and an orthographic turntable renderer, for tests, benchmarks and sample_images/.
+
+Geometry and conventions (the same ones `reconstruct` inverts):
+- Finger frame: rotation axis = z (proximal -> distal), volar pad towards +y, x lateral; the
+  rotation axis passes through the origin of every section.
+- View angle theta: the object is turned counter-clockwise about +z (seen from the distal tip) by
+  theta; the camera looks along -y of the turntable, so theta = 0 looks straight at the pad.
+  Image right is -x of the turned object, image up is +z (the axis is vertical, tip at the top,
+  rod entering from the bottom edge).
+- So at view theta the right border is the support function h(n) of the section in direction
+  n = (-cos theta, sin theta) and the left border is -h(-n), both measured from the axis.
+- Image geometry: the axis crosses the bottom image edge at column `W/2 + axis_offset_px` and
+  leans by `tilt_deg` (positive: top of the axis to the right). `s_mm` is the distance along the
+  axis from that crossing point; shape z = s_mm - `z0_s_mm`.
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import cv2
+import numpy as np
+from tqdm import tqdm
+
+from reconstruct.errors import InputError
+from reconstruct.io import staged_output, write_json
+
+SHAPES = ("fingertip", "sphere", "ellipsoid")
+
+#: Fingertip presets, mm. a: half width, b_volar / b_dorsal: half heights on the pad and nail
+#: sides, p_dorsal: superellipse exponent of the flattened nail side, centre: section centre
+#: relative to the rotation axis, length: body length (proximal cut to tip), cap: tip length.
+FINGERTIP_PRESETS = {
+    "human": dict(a=8.0, b_volar=6.5, b_dorsal=5.0, p_dorsal=3.0, centre=(0.6, 0.8),
+                  length=22.0, cap=7.0, taper=0.08, rod_radius=1.0),
+    "monkey": dict(a=4.0, b_volar=3.25, b_dorsal=2.5, p_dorsal=3.0, centre=(0.3, 0.4),
+                   length=11.0, cap=3.5, taper=0.08, rod_radius=0.5),
+}
+
+
+@dataclass
+class Shape:
+    """A solid with known axial sections. Subclasses give `_outline(z, t)`.
+
+    z_range_mm: (z0, z1) of the body; rod_radius_mm: mounting rod radius (0: none), the rod runs
+    along the axis from below the body into it.
+    """
+
+    name: str
+    z_range_mm: tuple[float, float]
+    rod_radius_mm: float = 0.0
+    params: dict = field(default_factory=dict)
+
+    def scale(self, z) -> np.ndarray:
+        """Section size factor in [0, 1] at z (array), 0 outside the body."""
+        raise NotImplementedError
+
+    def section(self, z_mm: float, n: int = 360) -> np.ndarray:
+        """(n, 2) counter-clockwise section polygon at z in the finger frame; (0, 2) outside."""
+        t = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+        s = float(self.scale(np.array([z_mm]))[0])
+        if s <= 0:
+            return np.zeros((0, 2))
+        return self._outline(z_mm, s, t)
+
+    def convex_section(self, z_mm: float, n: int = 720) -> np.ndarray:
+        """Convex hull of the section, CCW: what tangent-envelope reconstruction can recover."""
+        from scipy.spatial import ConvexHull
+
+        pts = self.section(z_mm, n)
+        if len(pts) < 3:
+            return pts
+        return pts[ConvexHull(pts).vertices]
+
+    def area_mm2(self, z_mm: float, n: int = 2000, convex: bool = True) -> float:
+        """Section area (of the convex hull by default) at z."""
+        p = self.convex_section(z_mm, n) if convex else self.section(z_mm, n)
+        if len(p) < 3:
+            return 0.0
+        x, y = p[:, 0], p[:, 1]
+        return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+
+    def volume_mm3(self, z_lo: float, z_hi: float, convex: bool = True, n_z: int = 801) -> float:
+        """Volume between two axial positions (Simpson's rule on section areas)."""
+        from scipy.integrate import simpson
+
+        z = np.linspace(z_lo, z_hi, n_z)
+        return float(simpson([self.area_mm2(zi, convex=convex) for zi in z], x=z))
+
+    def extent_table(self, z_mm: np.ndarray, directions: np.ndarray, n: int = 720) -> np.ndarray:
+        """Support function h(z, n) of the body (rod included if it has one), mm.
+
+        z_mm: (m,); directions: (k, 2) unit vectors. Returns (m, k); -inf where nothing is at z.
+        The rod runs along the axis from far below the body to its middle.
+        """
+        h = np.full((len(z_mm), len(directions)), -np.inf)
+        t = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+        for i, (z, s) in enumerate(zip(z_mm, self.scale(z_mm))):
+            if s > 0:
+                h[i] = (self._outline(z, s, t) @ directions.T).max(axis=0)
+        if self.rod_radius_mm > 0:
+            rod = z_mm < 0.5 * (self.z_range_mm[0] + self.z_range_mm[1])
+            h[rod] = np.maximum(h[rod], self.rod_radius_mm)
+        return h
+
+
+class Fingertip(Shape):
+    """Parametric fingertip: elliptic pad side, flattened (superellipse) nail side, section centre
+    off the rotation axis, slight taper along z, ellipsoidal distal cap; optional concave dorsal
+    groove (a nail-fold-like dent) that tangent-envelope reconstruction cannot see."""
+
+    def __init__(self, preset: str = "human", groove: bool = False):
+        if preset not in FINGERTIP_PRESETS:
+            raise InputError(f"unknown fingertip preset '{preset}': use one of {sorted(FINGERTIP_PRESETS)}")
+        p = dict(FINGERTIP_PRESETS[preset], preset=preset, groove=groove)
+        super().__init__("fingertip", (0.0, p["length"]), p["rod_radius"], p)
+
+    def scale(self, z):
+        p, z = self.params, np.asarray(z, float)
+        L, cap = p["length"], p["cap"]
+        body = (z >= 0) & (z <= L)
+        taper = 1.0 + p["taper"] * np.sin(np.pi * np.clip(z / L, 0, 1))
+        u = np.clip((z - (L - cap)) / cap, 0.0, 1.0)
+        return np.where(body, taper * np.sqrt(np.clip(1.0 - u**2, 0.0, None)), 0.0)
+
+    def _outline(self, z, s, t):
+        p = self.params
+        c, sn = np.cos(t), np.sin(t)
+        dorsal = sn < 0
+        e = 2.0 / np.where(dorsal, p["p_dorsal"], 2.0)
+        x = p["a"] * np.sign(c) * np.abs(c) ** e
+        y = np.where(dorsal, p["b_dorsal"], p["b_volar"]) * np.sign(sn) * np.abs(sn) ** e
+        if p["groove"]:
+            w = 0.2 * p["a"]
+            y = np.where(dorsal, y + 0.08 * p["b_dorsal"] * np.exp(-(x / w) ** 2), y)
+        return np.column_stack([s * x + p["centre"][0], s * y + p["centre"][1]])
+
+
+class Ellipsoid(Shape):
+    """Ellipsoid with semi-axes (a, b, c) along x, y, z, centred at (cx, cy, 0); a sphere if a=b=c."""
+
+    def __init__(self, name, a, b, c, centre=(0.0, 0.0), rod_radius=0.0):
+        super().__init__(name, (-c, c), rod_radius, dict(a=a, b=b, c=c, centre=centre))
+
+    def scale(self, z):
+        z = np.asarray(z, float) / self.params["c"]
+        return np.sqrt(np.clip(1.0 - z**2, 0.0, None)) * (np.abs(z) < 1)
+
+    def _outline(self, z, s, t):
+        p = self.params
+        return np.column_stack([s * p["a"] * np.cos(t) + p["centre"][0],
+                                s * p["b"] * np.sin(t) + p["centre"][1]])
+
+
+def make_shape(name: str, preset: str = "human", groove: bool = False, rod: bool = True) -> Shape:
+    """One of SHAPES. Sphere: R 7 mm, ellipsoid: 8 x 6 x 10 mm; both 0.5 mm off the axis."""
+    if name == "fingertip":
+        shape = Fingertip(preset, groove)
+    elif name == "sphere":
+        shape = Ellipsoid("sphere", 7.0, 7.0, 7.0, centre=(0.5, -0.3), rod_radius=1.0)
+    elif name == "ellipsoid":
+        shape = Ellipsoid("ellipsoid", 8.0, 6.0, 10.0, centre=(-0.4, 0.5), rod_radius=1.0)
+    else:
+        raise InputError(f"unknown shape '{name}': use one of {', '.join(SHAPES)}")
+    if not rod:
+        shape.rod_radius_mm = 0.0
+    return shape
+
+
+# ----------------------------------------------------------------------------- rendering
+BACKGROUND, OBJECT = 245.0, 25.0   # grey levels at full illumination
+
+
+def _interval_image(a_mm, b_mm, s_grid_mm, u_px, s_px, sx, sy, sub=4):
+    """Coverage (H, W) in [0, 1] of an object that spans u in [a(s), b(s)] at axial position s.
+
+    a_mm, b_mm: tables over s_grid_mm (b < a where nothing is there); u_px, s_px: (H, W) pixel
+    centre coordinates in mm. Exact box-filter overlap along u, `sub` sub-rows along s.
+    """
+    cov = np.zeros(u_px.shape)
+    for k in range(sub):
+        s = s_px + ((k + 0.5) / sub - 0.5) * sy
+        a = np.interp(s, s_grid_mm, a_mm, left=np.inf, right=np.inf)
+        b = np.interp(s, s_grid_mm, b_mm, left=-np.inf, right=-np.inf)
+        lo = np.maximum(a, u_px - 0.5 * sx)
+        hi = np.minimum(b, u_px + 0.5 * sx)
+        cov += np.clip(hi - lo, 0.0, None) / sx
+    return cov / sub
+
+
+class _Camera:
+    """Pixel centres -> (u, s) mm in the axis frame; see the module docstring."""
+
+    def __init__(self, size_px, mm_per_px, aspect, axis_offset_px, tilt_deg):
+        w, h = size_px
+        self.sx, self.sy = mm_per_px, mm_per_px * aspect
+        rows, cols = np.mgrid[0:h, 0:w].astype(float)
+        dx = (cols - (w / 2 + axis_offset_px)) * self.sx
+        dy = (h - 0.5 - rows) * self.sy
+        ta = np.deg2rad(tilt_deg)
+        self.u = dx * np.cos(ta) - dy * np.sin(ta)
+        self.s = dx * np.sin(ta) + dy * np.cos(ta)
+        r2 = ((cols - w / 2) / (w / 2)) ** 2 + ((rows - h / 2) / (h / 2)) ** 2
+        self.light = 1.0 - r2 / 2.0   # 1 at the centre, 0 at the corners before scaling
+
+
+def _photograph(coverage, cam, blur_px, noise, vignetting, rng):
+    """Grey uint8 image of a dark object (coverage) on a bright background."""
+    radiance = BACKGROUND + (OBJECT - BACKGROUND) * coverage
+    if blur_px > 0:
+        radiance = cv2.GaussianBlur(radiance, (0, 0), blur_px)
+    img = radiance * (1.0 - vignetting * (1.0 - cam.light))
+    img = img + rng.normal(0.0, noise, img.shape) if noise > 0 else img
+    return np.clip(np.rint(img), 0, 255).astype(np.uint8)
+
+
+def render_turntable(shape: Shape, out_dir, n_views: int = 100, span_deg: float = 360.0,
+                     size_px=(700, 900), mm_per_px: float = 0.04, aspect: float = 1.0,
+                     blur_px: float = 0.8, noise: float = 2.0, vignetting: float = 0.25,
+                     axis_offset_px: float = 0.0, tilt_deg: float = 0.0, rod: bool = True,
+                     seed: int = 0, template_diameter_mm: float = 12.7, progress: bool = False,
+                     image_format: str = "png") -> dict:
+    """Render a turntable folder: `view_XXX.XXdeg.png` images, `calibration.png` (a dark disc of
+    `template_diameter_mm` on its shaft), `turntable.toml`, and `truth.json`.
+
+    size_px: (W, H). Views at theta_i = i * span_deg / n_views. The body is placed with z = 0 at
+    2.5 mm above the bottom edge (rod below it). Returns the truth dictionary.
+    """
+    if n_views < 1 or span_deg <= 0 or mm_per_px <= 0 or aspect <= 0 or min(size_px) < 16:
+        raise InputError("render needs views >= 1, span > 0, mm-per-px > 0, aspect > 0 and images >= 16 px")
+    rng = np.random.default_rng(seed)
+    cam = _Camera(size_px, mm_per_px, aspect, axis_offset_px, tilt_deg)
+    z0_s = 2.5 - shape.z_range_mm[0]            # the body starts 2.5 mm above the bottom edge
+    if not rod:
+        shape.rod_radius_mm = 0.0
+    s_grid = np.arange(-2.0, cam.s.max() + 2.0, min(mm_per_px, mm_per_px * aspect) / 4)
+    thetas = np.arange(n_views) * span_deg / n_views
+    n_dirs = np.column_stack([-np.cos(np.deg2rad(thetas)), np.sin(np.deg2rad(thetas))])
+    h = shape.extent_table(s_grid - z0_s, np.vstack([n_dirs, -n_dirs]))
+
+    names = []
+    with staged_output(out_dir) as tmp:
+        for i in tqdm(range(n_views), desc="render", unit="view", disable=not progress):
+            cov = _interval_image(-h[:, n_views + i], h[:, i], s_grid, cam.u, cam.s, cam.sx, cam.sy)
+            name = f"view_{i:03d}_{thetas[i]:07.3f}deg.{image_format}"
+            cv2.imwrite(str(tmp / name), _photograph(cov, cam, blur_px, noise, vignetting, rng))
+            names.append(name)
+        # calibration template: a disc on a shaft of the rod's diameter, axis at the same place
+        r_t = template_diameter_mm / 2
+        sc = cam.s.max() / 2 + 1.0
+        ss = s_grid - sc
+        half = np.sqrt(np.clip(r_t**2 - ss**2, 0, None))
+        half = np.where(np.abs(ss) < r_t, half, -np.inf)
+        shaft = max(shape.rod_radius_mm, 0.5)
+        half = np.where(ss < 0, np.maximum(half, shaft), half)
+        cov = _interval_image(-half, half, s_grid, cam.u, cam.s, cam.sx, cam.sy)
+        cv2.imwrite(str(tmp / f"calibration.{image_format}"),
+                    _photograph(cov, cam, blur_px, noise, vignetting, rng))
+        (tmp / "turntable.toml").write_text(
+            f"# synthetic turntable set rendered by reconstruct.synthetic\n"
+            f"start_deg = 0.0\nstep_deg = {span_deg / n_views!r}\n"
+            f"template_diameter_mm = {template_diameter_mm!r}\naxis = \"vertical\"\n"
+            f"volar_view_deg = 0.0\n")
+        truth = {
+            "shape": shape.name, "params": {k: v for k, v in shape.params.items()},
+            "z_range_mm": list(shape.z_range_mm), "rod_radius_mm": shape.rod_radius_mm,
+            "views": n_views, "span_deg": span_deg, "size_px": list(size_px),
+            "mm_per_px": mm_per_px, "aspect": aspect, "blur_px": blur_px, "noise": noise,
+            "vignetting": vignetting, "axis_offset_px": axis_offset_px, "tilt_deg": tilt_deg,
+            "z0_s_mm": z0_s, "seed": seed, "template_diameter_mm": template_diameter_mm,
+            "note": "shape z = s_mm - z0_s_mm; s_mm: distance along the axis from where it "
+                    "crosses the bottom image edge",
+        }
+        write_json(tmp / "truth.json", truth)
+    return truth
+
+
+def load_truth_shape(folder) -> tuple[Shape, dict]:
+    """The Shape and truth dictionary behind a rendered folder (reads truth.json)."""
+    truth = json.loads((Path(folder) / "truth.json").read_text())
+    p = truth["params"]
+    if truth["shape"] == "fingertip":
+        shape = Fingertip(p["preset"], p["groove"])
+    else:
+        shape = Ellipsoid(truth["shape"], p["a"], p["b"], p["c"], tuple(p["centre"]))
+    shape.rod_radius_mm = truth["rod_radius_mm"]
+    return shape, truth
