@@ -1,0 +1,65 @@
+"""Export solutions: VTU with quadratic cells for ParaView, CSV of point samples. Writes are atomic.
+
+VTU: `tetra10` (3D) or `triangle6` (2D) cells on all P2 nodes; point data `displacement_mm`
+(n, 3); cell data `layer`, `E_MPa`, `nu` and every measure of fem.measures.MEASURES evaluated
+at the element centroid (cell data, so nothing is averaged across a layer interface).
+"""
+from __future__ import annotations
+
+import csv
+import os
+from pathlib import Path
+
+import numpy as np
+
+_VTK_CELL = {3: "tetra10", 2: "triangle6"}
+
+
+def _atomic(path, write):
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.partial{path.suffix}")
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def quadratic_cells(model) -> np.ndarray:
+    """(M, 10) or (M, 6) P2 node ids per element in VTK order (vertices, then edge midpoints)."""
+    return (model.basis.element_dofs[::model.dim] // model.dim).T
+
+
+def write_vtu(path, solution) -> None:
+    """Write `solution` (fem.solver.Solution) to a VTU file at `path`."""
+    import meshio
+
+    model = solution.model
+    points = np.zeros((model.nnodes, 3))
+    points[:, :model.dim] = model.nodes
+    disp = np.zeros((model.nnodes, 3))
+    disp[:, :model.dim] = solution.displacement_mm
+    E = np.vectorize(model.material.E_MPa.get, otypes=[float])(model.layer)
+    nu = np.vectorize(model.material.nu.get, otypes=[float])(model.layer)
+    cell_data = {"layer": model.layer.astype(np.int32), "E_MPa": E, "nu": nu, **solution.element_fields}
+    mesh = meshio.Mesh(points, [(_VTK_CELL[model.dim], quadratic_cells(model))],
+                       point_data={"displacement_mm": disp},
+                       cell_data={k: [np.asarray(v)] for k, v in cell_data.items()})
+    _atomic(path, lambda tmp: meshio.write(tmp, mesh, file_format="vtu"))
+
+
+def write_csv(path, points, columns: dict[str, np.ndarray]) -> None:
+    """CSV with x_mm, y_mm, z_mm then one column per entry of `columns` ((n,) arrays)."""
+    x = np.zeros((len(np.atleast_2d(points)), 3))
+    p = np.atleast_2d(np.asarray(points, dtype=float))
+    x[:, :p.shape[1]] = p[:, :3]
+
+    def write(tmp):
+        with open(tmp, "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(["x_mm", "y_mm", "z_mm", *columns])
+            for i in range(len(x)):
+                w.writerow([*(f"{v:.6g}" for v in x[i]), *(f"{np.asarray(c)[i]:.9g}" for c in columns.values())])
+
+    _atomic(path, write)

@@ -1,0 +1,691 @@
+"""Static, locking-free linear elasticity on layered P2 meshes: 3D tetrahedra and 2D plane strain.
+
+Units: mm, N, MPa. In 2D (plane strain, x-y plane) forces and tractions are per mm of thickness.
+
+Formulation
+-----------
+Quadratic (P2) displacements with an element-wise constant volumetric strain (B-bar / P2-P0
+mixed u-p with the pressure condensed element by element). With d the space dimension,
+theta = tr eps(u) and theta_bar the element mean of theta, the assumed strain is
+
+    eps_bar = dev_d eps(u) + theta_bar / d * I,      dev_d e = e - tr(e) / d * I
+    a(u, v) = int 2 mu dev_d eps(u) : dev_d eps(v) + (lambda + 2 mu / d) theta_bar(u) theta_bar(v)
+    sigma   = 2 mu eps_bar + lambda theta_bar I      (3x3; in plane strain eps_zz = 0)
+
+P2-P0 is inf-sup stable, so stresses stay accurate as nu -> 0.5 (plain P2 gives 50 % stress
+errors at nu = 0.4999); the condensed system is symmetric positive definite, factorised once
+(MKL PARDISO via pypardiso; SciPy SuperLU fallback, slow, with a warning) and re-solved for new
+right-hand sides. The pressure is constant per element, so it never couples across a layer
+interface (elements never straddle one). Strain, stress and every measure are the element's own
+fields (eps_bar, sigma), evaluated in the element that holds the point.
+
+User API
+--------
+    model = Model.from_mesh("mesh.vtu", material="m43338", nu=0.48)      # or Model(points, cells, layer, regions)
+    sol = model.solve(prescribed={"nail": 0.0, "support": (None, 0.0, None), "pad": (0, -1.0, 0)},
+                      pressures={"inner": 0.01}, tractions=..., forces=..., point_forces=...)
+    sol.sample("sed_MPa", points)   # fem.measures.MEASURES lists every name
+    sol.save("static.vtu", points=receptors)   # tetra10/triangle6 VTU + CSV of samples
+
+Prescribed values per region: a scalar (all components), a tuple with None for free components,
+an (n_region_vertices, dim) array (midside nodes take the mean of their edge's two vertices), or a
+callable x (n, dim) -> (n, dim) over all region nodes (NaN = free).
+
+Stable API for the contact solver (issue 5)
+-------------------------------------------
+    system = model.system(prescribed={...})   # LinearSystem; factorisation cached per constrained-DOF set
+    system.u0                  # (ndof,) response to the prescribed displacements alone
+    system.solve(f)            # f (ndof,) or (ndof, k) nodal forces [N] -> u, same shape, u = 0 on
+                               # constrained DOFs; loads on constrained DOFs are ignored
+    u = system.u0 + system.solve(f)            # superposition; system.residual = last relative residual
+    model.vertex_dofs(ids) -> (n, dim) int     # DOF indices of mesh vertices (node k has DOFs dim*k + c)
+    model.node_dofs(nodes) -> (n, dim) int     # same for any P2 node (vertices first, then midside nodes)
+    model.surface_nodes(region, midside=True) -> SurfaceNodes(nodes, dofs, x, normal, area)
+                               # outward unit normals and tributary areas [mm^2] (2D: lengths [mm])
+    model.strain_operator(points, layer=None)  # sparse (n_points * ncomp, ndof); ncomp 6 (3D:
+                               # xx, yy, zz, yz, xz, xy tensor components) or 3 (2D: xx, yy, xy)
+    model.stress_operator(points, layer=None)  # sparse (n_points * 6, ndof) [MPa]; 2D: xx, yy, zz, xy (4)
+    model.displacement_operator(points)        # sparse (n_points * dim, ndof)
+    model.solution(u, f=None) -> Solution      # fields, measures, sample, save for any u
+    model.load_vector(tractions=..., pressures=..., forces=..., point_forces=...) -> (ndof,)
+"""
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+from skfem import (Basis, BilinearForm, ElementTetP0, ElementTetP2, ElementTriP0, ElementTriP2,
+                   ElementVector, FacetBasis, LinearForm, MeshTet, MeshTri, asm)
+from skfem.helpers import ddot, div, dot, eye, sym_grad, trace
+
+from fem.materials import Material
+from reconstruct.errors import InputError
+
+#: strain tensor components returned by strain_operator, per space dimension
+STRAIN_COMPONENTS = {3: ("xx", "yy", "zz", "yz", "xz", "xy"), 2: ("xx", "yy", "xy")}
+#: stress components returned by stress_operator (plane strain has sigma_zz)
+STRESS_COMPONENTS = {3: ("xx", "yy", "zz", "yz", "xz", "xy"), 2: ("xx", "yy", "zz", "xy")}
+_INDEX = {"x": 0, "y": 1, "z": 2}
+
+
+def _dev(e, d):
+    return e - eye(trace(e) / d, d)
+
+
+@BilinearForm
+def _deviatoric(u, v, w):
+    eu, ev = sym_grad(u), sym_grad(v)
+    d = eu.shape[0]
+    return 2.0 * w.mu * ddot(_dev(eu, d), _dev(ev, d))
+
+
+@BilinearForm
+def _divergence(u, q, w):
+    return div(u) * q
+
+
+class _Factor:
+    """Cholesky-type factorisation of an SPD matrix, reused for many right-hand sides."""
+
+    def __init__(self, A: sp.spmatrix):
+        try:
+            from pypardiso import PyPardisoSolver
+            from pypardiso.pardiso_wrapper import PyPardisoError
+        except ImportError:
+            warnings.warn("pypardiso is not installed: using SciPy SuperLU, about 50x slower "
+                          "(pip install pypardiso)", stacklevel=3)
+            from scipy.sparse.linalg import splu
+            lu = splu(A.tocsc())
+            self.backend, self._solve = "scipy-splu", lu.solve
+            return
+        self._A = sp.triu(A, format="csr")       # PARDISO mtype 2 (real SPD) reads the upper triangle
+        self._pardiso = PyPardisoSolver(mtype=2)
+        try:
+            self._pardiso.factorize(self._A)
+        except PyPardisoError as exc:
+            raise InputError(f"the stiffness matrix is not positive definite ({exc}); "
+                             "check that every part of the mesh is held") from None
+        self.backend = "pardiso"
+        self._solve = lambda b: self._pardiso.solve(self._A, b)
+
+    def __call__(self, b: np.ndarray) -> np.ndarray:
+        return self._solve(np.asarray(b, dtype=float))
+
+
+def _relative_residual(A, x, b):
+    r = np.linalg.norm(A @ x - b, axis=0)
+    nb = np.linalg.norm(b, axis=0)
+    return float(np.max(np.where(nb > 0, r / np.where(nb > 0, nb, 1.0), r)))
+
+
+class LinearSystem:
+    """K restricted to the free DOFs, factorised once; prescribed values bound to it.
+
+    Attributes: `fixed` (m,), `free` (ndof - m,) DOF indices; `values` (m,) prescribed
+    displacements [mm]; `u0` (ndof,) response to them with no load; `residual` relative
+    residual ||K_ff x - b|| / ||b|| of the last solve; `backend` ("pardiso" or "scipy-splu").
+    """
+
+    def __init__(self, model: "Model", fixed: np.ndarray, values: np.ndarray, factor: _Factor):
+        self.model, self.fixed, self.values, self._factor = model, fixed, values, factor
+        self.free = np.setdiff1d(np.arange(model.ndof), fixed)
+        self._K_ff = model.K[self.free][:, self.free]
+        self.backend = factor.backend
+        self.u0 = np.zeros(model.ndof)
+        self.u0[fixed] = values
+        if np.any(values):
+            b = -(model.K[self.free][:, fixed] @ values)
+            self.u0[self.free] = self._solve_free(b)
+            self.residual_u0 = self.residual
+        else:
+            self.residual = self.residual_u0 = 0.0
+
+    def _solve_free(self, b):
+        x = self._factor(b)
+        self.residual = _relative_residual(self._K_ff, x, b)
+        return x
+
+    def solve(self, f: np.ndarray) -> np.ndarray:
+        """Displacement [mm] (ndof,) or (ndof, k) caused by nodal forces `f` [N], zero on `fixed`."""
+        f = np.asarray(f, dtype=float)
+        if f.shape[0] != self.model.ndof:
+            raise ValueError(f"load vector has {f.shape[0]} rows, the model has {self.model.ndof} DOFs")
+        u = np.zeros(f.shape)
+        u[self.free] = self._solve_free(f[self.free])
+        return u
+
+    def displacement(self, f: np.ndarray | None = None) -> np.ndarray:
+        """u0 + solve(f); sets `residual` to that of the combined system."""
+        if f is None:
+            self.residual = self.residual_u0
+            return self.u0.copy()
+        u = self.u0 + self.solve(f)
+        b = f[self.free] - self.model.K[self.free][:, self.fixed] @ self.values
+        self.residual = _relative_residual(self._K_ff, u[self.free], b)
+        return u
+
+
+@dataclass(frozen=True)
+class SurfaceNodes:
+    """Nodes of a boundary region: P2 node ids (n,), DOFs (n, dim), coordinates x (n, dim) [mm],
+    outward unit normals (n, dim), tributary areas (n,) [mm^2; mm in 2D]."""
+
+    nodes: np.ndarray
+    dofs: np.ndarray
+    x: np.ndarray
+    normal: np.ndarray
+    area: np.ndarray
+
+
+class Model:
+    """A layered mesh, its materials and the assembled P2 stiffness.
+
+    Parameters
+    ----------
+    points : (N, 2 or 3) vertex coordinates [mm]; a 2D model uses x, y.
+    cells : (M, 4) linear tetrahedra (3D) or (M, 3) triangles (2D plane strain).
+    layer : (M,) positive int layer id per cell.
+    regions : name -> bool/uint8 (N,) vertex flags, or an int array of vertex ids. A region is the
+        boundary facets whose vertices are all flagged; its nodes are the flagged vertices plus
+        the midside nodes of those facets.
+    material : `mABCDE` code, moduli [MPa] per layer (mapping or sequence), or a `Material`.
+    nu : Poisson ratio in [0, 0.4999] (ignored when `material` is a `Material`).
+    rigid_bone : treat layer 5 as rigid (its nodes fixed) instead of elastic.
+    """
+
+    def __init__(self, points, cells, layer, regions=None, material="m33338", nu=0.48,
+                 rigid_bone=False):
+        cells = np.asarray(cells, dtype=np.int64)
+        if cells.ndim != 2 or cells.shape[1] not in (3, 4):
+            raise InputError(f"cells must be (M, 4) tetrahedra or (M, 3) triangles, got shape {cells.shape}")
+        self.dim = cells.shape[1] - 1
+        points = np.asarray(points, dtype=float)
+        if points.ndim != 2 or points.shape[1] < self.dim:
+            raise InputError(f"points must be (N, {self.dim}) or (N, 3), got shape {points.shape}")
+        p = np.ascontiguousarray(points[:, :self.dim].T)
+        cells = self._oriented(p, cells)
+        self.mesh = (MeshTet if self.dim == 3 else MeshTri)(p, np.ascontiguousarray(cells.T))
+        self.layer = np.asarray(layer, dtype=np.int64).ravel()
+        if self.layer.shape != (len(cells),):
+            raise InputError(f"'layer' has {self.layer.size} values for {len(cells)} cells; "
+                             "give one layer id per cell")
+        self.material = material if isinstance(material, Material) else Material(material, nu, rigid_bone=rigid_bone)
+        self.mu, self.lam = self.material.lame(self.layer)
+        self.regions = {name: self._flags(name, v) for name, v in (regions or {}).items()}
+        scalar, p0 = (ElementTetP2(), ElementTetP0()) if self.dim == 3 else (ElementTriP2(), ElementTriP0())
+        self.basis = Basis(self.mesh, ElementVector(scalar), intorder=2)
+        self._p0 = Basis(self.mesh, p0, intorder=2)
+        self.ndof = self.basis.N
+        self.nnodes = self.ndof // self.dim
+        self._factors: dict = {}
+
+    # ------------------------------------------------------------------ construction
+    @classmethod
+    def from_mesh(cls, path, material="m33338", nu=0.48, rigid_bone=False) -> "Model":
+        """Read `mesh.vtu` (meshio): `tetra` (3D) or `triangle` (2D) cells, cell data `layer`,
+        point data region flags (0/1 integer arrays)."""
+        import meshio
+
+        try:
+            m = meshio.read(path)
+        except Exception as exc:  # meshio raises many types for unreadable files
+            raise InputError(f"cannot read mesh '{path}': {exc}") from None
+        kind = "tetra" if any(b.type == "tetra" for b in m.cells) else "triangle"
+        blocks = [i for i, b in enumerate(m.cells) if b.type == kind]
+        if not blocks:
+            raise InputError(f"mesh '{path}' has no 'tetra' or 'triangle' cells (linear cells are required)")
+        if "layer" not in m.cell_data:
+            raise InputError(f"mesh '{path}' has no cell data 'layer'; every cell needs its layer id "
+                             "(1 = epidermis ... 5 = bone)")
+        cells = np.vstack([m.cells[i].data for i in blocks])
+        layer = np.concatenate([np.asarray(m.cell_data["layer"][i]).ravel() for i in blocks])
+        regions = {k: v for k, v in m.point_data.items()
+                   if np.asarray(v).ndim == 1 and np.asarray(v).dtype.kind in "biu"
+                   and np.isin(v, (0, 1)).all()}
+        return cls(m.points, cells, layer, regions, material=material, nu=nu, rigid_bone=rigid_bone)
+
+    @staticmethod
+    def _oriented(p, cells):
+        x = p.T[cells]
+        e = x[:, 1:] - x[:, :1]
+        det = np.linalg.det(e) if len(cells) else np.zeros(0)
+        if np.any(np.abs(det) <= 1e-14 * np.max(np.abs(e)) ** len(p)):
+            raise InputError(f"{int(np.sum(np.abs(det) <= 0))} degenerate (zero-volume) cells in the mesh")
+        cells = cells.copy()
+        neg = det < 0
+        cells[neg, 0], cells[neg, 1] = cells[neg, 1], cells[neg, 0].copy()
+        return cells
+
+    def _flags(self, name, v):
+        v = np.asarray(v)
+        n = self.mesh.nvertices
+        if v.dtype.kind == "b" or (v.dtype == np.uint8 and v.size == n):
+            if v.size != n:
+                raise InputError(f"region '{name}' has {v.size} flags for {n} vertices")
+            return v.astype(bool)
+        flags = np.zeros(n, dtype=bool)
+        if v.size and (v.min() < 0 or v.max() >= n):
+            raise InputError(f"region '{name}' refers to vertex ids outside 0..{n - 1}")
+        flags[v.astype(np.int64)] = True
+        return flags
+
+    # ------------------------------------------------------------------ DOFs and regions
+    def node_dofs(self, nodes) -> np.ndarray:
+        """(n, dim) DOF indices of P2 nodes (vertex ids first, then midside nodes)."""
+        return self.dim * np.asarray(nodes, dtype=np.int64)[:, None] + np.arange(self.dim)
+
+    vertex_dofs = node_dofs
+
+    @cached_property
+    def nodes(self) -> np.ndarray:
+        """(nnodes, dim) coordinates [mm] of all P2 nodes."""
+        return self.basis.doflocs[:, ::self.dim].T.copy()
+
+    @cached_property
+    def _edges(self) -> np.ndarray:
+        """(2, n) vertex pairs of the midside nodes, in node order after the vertices."""
+        return self.mesh.edges if self.dim == 3 else self.mesh.facets
+
+    def _region(self, name) -> np.ndarray:
+        if name not in self.regions:
+            raise InputError(f"unknown region '{name}'; the mesh has regions {sorted(self.regions)}")
+        return self.regions[name]
+
+    def region_facets(self, name) -> np.ndarray:
+        """Boundary facet ids whose vertices all carry region `name`'s flag."""
+        flags = self._region(name)
+        bf = self.mesh.boundary_facets()
+        return bf[flags[self.mesh.facets[:, bf]].all(axis=0)]
+
+    def _facet_midsides(self, facets):
+        if self.dim == 2:
+            return self.mesh.nvertices + facets
+        return self.mesh.nvertices + np.unique(self.mesh.f2e[:, facets])
+
+    def region_nodes(self, name) -> np.ndarray:
+        """Sorted P2 node ids of a region: flagged vertices + midside nodes of its facets."""
+        return np.union1d(np.flatnonzero(self._region(name)), self._facet_midsides(self.region_facets(name)))
+
+    def surface_nodes(self, name, midside=True) -> SurfaceNodes:
+        """Nodes of region `name`'s facets with outward unit normals and tributary areas.
+
+        Areas split each facet among its nodes: 3D with midside nodes A/12 per vertex and A/4 per
+        edge node (the facet cut into 4 triangles, each shared by its corners); 2D with midside
+        L/6 and 2L/3 (Simpson); without midside nodes A/3 (3D) or L/2 (2D) per vertex.
+        """
+        facets = self.region_facets(name)
+        fv = self.mesh.facets[:, facets]                                    # (dim, nf)
+        x = self.mesh.p[:, fv]                                              # (dim, dim, nf)
+        if self.dim == 3:
+            nvec = np.cross((x[:, 1] - x[:, 0]).T, (x[:, 2] - x[:, 0]).T)
+        else:
+            t = (x[:, 1] - x[:, 0]).T
+            nvec = np.column_stack([t[:, 1], -t[:, 0]])
+        size = np.linalg.norm(nvec, axis=1) / (2.0 if self.dim == 3 else 1.0)
+        inner = self.mesh.p[:, self.mesh.t[:, self.mesh.f2t[0, facets]]].mean(axis=1).T
+        flip = np.einsum("ij,ij->i", nvec, x.mean(axis=1).T - inner) < 0
+        nvec[flip] *= -1
+        unit = nvec / np.linalg.norm(nvec, axis=1, keepdims=True)
+        vshare = (1 / 12 if self.dim == 3 else 1 / 6) if midside else 1 / self.dim
+        ids = [fv.ravel()]
+        weights = [np.tile(size * vshare, self.dim)]
+        if midside:
+            mids = (self.mesh.f2e[:, facets] if self.dim == 3 else facets[None]) + self.mesh.nvertices
+            ids.append(mids.ravel())
+            weights.append(np.tile(size * (0.25 if self.dim == 3 else 2 / 3), mids.shape[0]))
+        ids, weights = np.concatenate(ids), np.concatenate(weights)
+        nodes, inv = np.unique(ids, return_inverse=True)
+        area = np.bincount(inv, weights=weights, minlength=len(nodes))
+        nsum = np.zeros((len(nodes), self.dim))
+        reps = len(ids) // len(facets) if len(facets) else 0
+        np.add.at(nsum, inv, np.tile(unit * size[:, None], (reps, 1)))
+        normal = nsum / np.maximum(np.linalg.norm(nsum, axis=1, keepdims=True), 1e-300)
+        return SurfaceNodes(nodes, self.node_dofs(nodes), self.nodes[nodes], normal, area)
+
+    # ------------------------------------------------------------------ assembly
+    @cached_property
+    def volume(self) -> np.ndarray:
+        """(M,) element volumes [mm^3] (2D: areas [mm^2])."""
+        return self._p0.dx.sum(axis=1)
+
+    @cached_property
+    def _B(self) -> sp.csr_matrix:
+        """(M, ndof): row e maps u to int_e div u."""
+        return asm(_divergence, self.basis, self._p0).tocsr()
+
+    @cached_property
+    def K(self) -> sp.csr_matrix:
+        """(ndof, ndof) symmetric positive semi-definite stiffness [N/mm]."""
+        nqp = self.basis.X.shape[1]
+        Kdev = asm(_deviatoric, self.basis, mu=np.repeat(self.mu[:, None], nqp, axis=1))
+        kappa = self.lam + 2.0 * self.mu / self.dim
+        Kvol = self._B.T @ sp.diags(kappa / self.volume) @ self._B
+        return (Kdev + Kvol).tocsr()
+
+    # ------------------------------------------------------------------ loads
+    def _facet_basis(self, name):
+        facets = self.region_facets(name)
+        if len(facets) == 0:
+            raise InputError(f"region '{name}' has no boundary facets to load")
+        return FacetBasis(self.mesh, self.basis.elem, facets=facets, intorder=4)
+
+    def load_vector(self, tractions=None, pressures=None, forces=None, point_forces=None) -> np.ndarray:
+        """Consistent nodal forces (ndof,) [N].
+
+        tractions : region -> traction vector (dim,) [MPa] or callable x (dim, ...) -> (dim, ...)
+        pressures : region -> normal pressure [MPa] (positive pushes into the body) or callable
+        forces : region -> total force (dim,) [N], spread as a uniform traction over the region
+        point_forces : (vertex_ids (n,), forces (n, dim) [N]) applied at single vertices
+        """
+        f = np.zeros(self.ndof)
+        for name, t in (tractions or {}).items():
+            fb = self._facet_basis(name)
+            f += asm(LinearForm(lambda v, w: dot(self._field(t, w.x, (self.dim,)), v)), fb)
+        for name, pr in (pressures or {}).items():
+            fb = self._facet_basis(name)
+            f += asm(LinearForm(lambda v, w: -self._field(pr, w.x, ()) * dot(w.n, v)), fb)
+        for name, F in (forces or {}).items():
+            fb = self._facet_basis(name)
+            F = np.asarray(F, dtype=float).reshape(self.dim)
+            t = F / fb.dx.sum()
+            f += asm(LinearForm(lambda v, w: dot(self._field(t, w.x, (self.dim,)), v)), fb)
+        if point_forces is not None:
+            ids, F = point_forces
+            np.add.at(f, self.vertex_dofs(np.atleast_1d(ids)).ravel(),
+                      np.asarray(F, dtype=float).reshape(-1, self.dim).ravel())
+        return f
+
+    @staticmethod
+    def _field(value, x, shape):
+        if callable(value):
+            return np.asarray(value(x), dtype=float)
+        value = np.asarray(value, dtype=float)
+        if value.shape != shape:
+            raise InputError(f"load value has shape {value.shape}, expected {shape}")
+        return value.reshape(shape + (1,) * (x.ndim - 1))
+
+    # ------------------------------------------------------------------ constraints and solve
+    def _prescribed_values(self, name, spec) -> tuple[np.ndarray, np.ndarray]:
+        nodes = self.region_nodes(name)
+        if callable(spec):
+            vals = np.asarray(spec(self.nodes[nodes]), dtype=float).reshape(len(nodes), self.dim)
+        elif np.ndim(spec) == 2:
+            verts = np.flatnonzero(self._region(name))
+            arr = np.asarray(spec, dtype=float)
+            if arr.shape != (len(verts), self.dim):
+                raise InputError(f"prescribed displacement for '{name}' has shape {arr.shape}; expected "
+                                 f"({len(verts)}, {self.dim}), one row per region vertex in id order")
+            per_vertex = np.full((self.mesh.nvertices, self.dim), np.nan)
+            per_vertex[verts] = arr
+            full = np.vstack([per_vertex, per_vertex[self._edges].mean(axis=0)])
+            vals = full[nodes]
+        else:
+            comp = np.array([np.nan if c is None else c for c in np.broadcast_to(
+                np.asarray(spec, dtype=object), (self.dim,))], dtype=float)
+            vals = np.broadcast_to(comp, (len(nodes), self.dim))
+        dofs = self.node_dofs(nodes)
+        keep = ~np.isnan(vals)
+        return dofs[keep], vals[keep]
+
+    def _constraints(self, prescribed) -> tuple[np.ndarray, np.ndarray]:
+        dofs, vals = [], []
+        for name, spec in (prescribed or {}).items():
+            d, v = self._prescribed_values(name, spec)
+            dofs.append(d)
+            vals.append(v)
+        rigid = np.isin(self.layer, list(self.material.rigid))
+        used = np.zeros(self.ndof, dtype=bool)
+        used[self.basis.element_dofs[:, ~rigid].ravel()] = True
+        held = np.flatnonzero(~used)                # rigid-layer and unused nodes: zero displacement
+        dofs.append(held)
+        vals.append(np.zeros(len(held)))
+        dofs, vals = np.concatenate(dofs), np.concatenate(vals)
+        order = np.lexsort((vals, dofs))
+        dofs, vals = dofs[order], vals[order]
+        first = np.r_[True, dofs[1:] != dofs[:-1]]
+        clash = ~first & (np.abs(np.diff(vals, prepend=0.0)) > 1e-12 * (1 + np.abs(vals)))
+        if clash.any():
+            raise InputError(f"{int(clash.sum())} DOFs get two different prescribed displacements "
+                             "(overlapping regions); make the regions agree where they meet")
+        return dofs[first], vals[first]
+
+    def _check_held(self, fixed):
+        """Refuse constraints that leave a rigid-body motion free (a singular system)."""
+        n, d = self.mesh.nvertices, self.dim
+        t = self.mesh.t
+        adj = sp.coo_matrix((np.ones(t.size), (np.repeat(t[0], t.shape[0]), t.T.ravel())), shape=(n, n))
+        ncomp, label = connected_components(adj, directed=False)
+        node_label = np.concatenate([label, label[self._edges[0]]])
+        names = ["translation x", "translation y", "translation z"][:d] + (
+            ["rotation about x", "rotation about y", "rotation about z"] if d == 3 else ["rotation about z"])
+        is_fixed = np.zeros(self.ndof, dtype=bool)
+        is_fixed[fixed] = True
+        for c in range(ncomp):
+            nodes = np.flatnonzero(node_label == c)
+            x = self.nodes[nodes] - self.nodes[nodes].mean(axis=0)
+            x /= max(np.abs(x).max(), 1e-300)
+            modes = [np.eye(d)[i][None].repeat(len(nodes), 0) for i in range(d)]
+            if d == 3:
+                modes += [np.cross(np.eye(3)[i], x) for i in range(3)]
+            else:
+                modes += [np.column_stack([-x[:, 1], x[:, 0]])]
+            R = np.stack([m.ravel() for m in modes], axis=1)[is_fixed[self.node_dofs(nodes).ravel()]]
+            s, V = (np.linalg.svd(R)[1:] if len(R) else (np.zeros(0), np.eye(len(modes))))
+            free = [names[np.argmax(np.abs(v))] for v in V[len(s[s > 1e-8 * max(s.max(initial=0), 1)]):]]
+            if free:
+                raise InputError(f"the system is singular: nothing holds {', '.join(free)}"
+                                 + (f" of mesh part {c + 1} of {ncomp}" if ncomp > 1 else "")
+                                 + "; prescribe displacements on a region, e.g. prescribed={'nail': 0.0}")
+
+    def system(self, prescribed=None) -> LinearSystem:
+        """Factorised system for these constraints (cached per set of constrained DOFs)."""
+        fixed, values = self._constraints(prescribed)
+        key = fixed.tobytes()
+        if key not in self._factors:
+            self._check_held(fixed)
+            free = np.setdiff1d(np.arange(self.ndof), fixed)
+            self._factors = {key: _Factor(self.K[free][:, free])}   # keep one factorisation in memory
+        return LinearSystem(self, fixed, values, self._factors[key])
+
+    def solve(self, prescribed=None, tractions=None, pressures=None, forces=None, point_forces=None,
+              f=None) -> "Solution":
+        """Static solution for prescribed displacements [mm] and loads (see `load_vector`; `f` adds
+        raw nodal forces (ndof,) [N])."""
+        system = self.system(prescribed)
+        load = self.load_vector(tractions, pressures, forces, point_forces)
+        if f is not None:
+            load = load + f
+        u = system.displacement(load if load.any() else None)
+        return Solution(self, u, load, system.residual)
+
+    def solution(self, u: np.ndarray, f: np.ndarray | None = None, residual: float = float("nan")) -> "Solution":
+        """Wrap a displacement vector u (ndof,) [mm] (e.g. from a contact solve) as a Solution."""
+        return Solution(self, np.asarray(u, dtype=float), f, residual)
+
+    # ------------------------------------------------------------------ point evaluation
+    @cached_property
+    def _affine(self):
+        p, t = self.mesh.p.T, self.mesh.t.T
+        A = np.stack([p[t[:, k]] - p[t[:, 0]] for k in range(1, self.dim + 1)], axis=2)
+        return p[t[:, 0]], np.linalg.inv(A)
+
+    def _min_barycentric(self, x, cand):
+        p0, Ainv = self._affine
+        X = np.einsum("...ij,...j->...i", Ainv[cand], x[:, None, :] - p0[cand])
+        return np.minimum(1.0 - X.sum(axis=-1), X.min(axis=-1))
+
+    def locate(self, points, layer=None) -> np.ndarray:
+        """(n,) element holding each point (n, dim or 3) [mm]; `layer` restricts the search.
+
+        On an interface the element with the point deepest inside wins; give `layer` to choose.
+        """
+        x = np.atleast_2d(np.asarray(points, dtype=float))[:, :self.dim]
+        pool = np.arange(self.mesh.nelements) if layer is None else np.flatnonzero(self.layer == layer)
+        if len(pool) == 0:
+            raise InputError(f"no elements in layer {layer}; the mesh has layers {sorted(set(self.layer))}")
+        centroids = self.mesh.p[:, self.mesh.t[:, pool]].mean(axis=1).T
+        _, idx = cKDTree(centroids).query(x, k=min(16, len(pool)))
+        cand = pool[np.asarray(idx).reshape(len(x), -1)]
+        score = self._min_barycentric(x, cand)
+        best = np.argmax(score, axis=1)
+        cells, inside = cand[np.arange(len(x)), best], score[np.arange(len(x)), best]
+        for i in np.flatnonzero(inside < -1e-9):   # rare: search every element of the pool
+            s = np.concatenate([self._min_barycentric(x[i:i + 1], chunk[None])[0]
+                                for chunk in np.array_split(pool, max(1, len(pool) // 100000))])
+            cells[i], inside[i] = pool[np.argmax(s)], s.max()
+        if np.any(inside < -1e-6):
+            i = np.flatnonzero(inside < -1e-6)
+            where = "the mesh" if layer is None else f"layer {layer}"
+            raise InputError(f"{len(i)} sample points lie outside {where}, e.g. {x[i[0]].round(4).tolist()} mm")
+        return cells
+
+    def _reference(self, x, cells):
+        p0, Ainv = self._affine
+        return np.einsum("nij,nj->in", Ainv[cells], x - p0[cells])
+
+    def _shape(self, x, cells):
+        """Values (nb, dim, n) and gradients (nb, dim, dim, n) of the element basis at x."""
+        X = self._reference(x, cells)[:, :, None]
+        fields = [self.basis.elem.gbasis(self.basis.mapping, X, k, tind=cells)[0]
+                  for k in range(self.basis.Nbfun)]
+        return (np.array([f.value[..., 0] for f in fields]), np.array([f.grad[..., 0] for f in fields]))
+
+    def _operator(self, x, cells, quantity):
+        """Sparse (n * ncomp, ndof) map from u to `quantity` at points x (n, dim) in `cells`."""
+        n, d = len(x), self.dim
+        value, grad = self._shape(x, cells)
+        dofs = self.basis.element_dofs[:, cells]                        # (nb, n)
+        if quantity == "displacement":
+            rows = (np.arange(n)[None, None] * d + np.arange(d)[None, :, None])
+            rows = np.broadcast_to(rows, value.shape)
+            cols = np.broadcast_to(dofs[:, None, :], value.shape)
+            return sp.csr_matrix((value.ravel(), (rows.ravel(), cols.ravel())), shape=(n * d, self.ndof))
+        eps = 0.5 * (grad + grad.transpose(0, 2, 1, 3))
+        dev = eps - np.einsum("kiin->kn", eps)[:, None, None] / d * np.eye(d)[None, :, :, None]
+        vol = (sp.diags(1.0 / (d * self.volume[cells])) @ self._B[cells]).tocoo()    # theta_bar / d
+        comps = [(_INDEX[c[0]], _INDEX[c[1]]) for c in STRAIN_COMPONENTS[d]]
+        ncomp = len(comps)
+        rows, cols, vals = [], [], []
+        for c, (i, j) in enumerate(comps):
+            rows.append(np.broadcast_to(np.arange(n) * ncomp + c, dofs.shape).ravel())
+            cols.append(dofs.ravel())
+            vals.append(dev[:, i, j].ravel())
+            if i == j:
+                rows.append(vol.row * ncomp + c)
+                cols.append(vol.col)
+                vals.append(vol.data)
+        strain = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                               shape=(n * ncomp, self.ndof))
+        if quantity == "strain":
+            return strain
+        # stress = 2 mu eps_bar + lambda tr(eps_bar) I, laid out as STRESS_COMPONENTS
+        out, names = STRESS_COMPONENTS[d], STRAIN_COMPONENTS[d]
+        S = np.array([[float(a == b) for b in names] for a in out])
+        T = np.outer([a[0] == a[1] for a in out], [b[0] == b[1] for b in names]).astype(float)
+        M = 2 * self.mu[cells, None, None] * S + self.lam[cells, None, None] * T   # (n, nout, ncomp)
+        k, a, c = np.indices(M.shape)
+        hooke = sp.csr_matrix((M.ravel(), ((k * len(out) + a).ravel(), (k * ncomp + c).ravel())),
+                              shape=(n * len(out), n * ncomp))
+        return (hooke @ strain).tocsr()
+
+    def displacement_operator(self, points, layer=None) -> sp.csr_matrix:
+        """(n * dim, ndof) sparse: displacement [mm] at points, point-major."""
+        x = np.atleast_2d(np.asarray(points, dtype=float))[:, :self.dim]
+        return self._operator(x, self.locate(x, layer), "displacement")
+
+    def strain_operator(self, points, layer=None) -> sp.csr_matrix:
+        """(n * ncomp, ndof) sparse: strain tensor components (STRAIN_COMPONENTS) at points."""
+        x = np.atleast_2d(np.asarray(points, dtype=float))[:, :self.dim]
+        return self._operator(x, self.locate(x, layer), "strain")
+
+    def stress_operator(self, points, layer=None) -> sp.csr_matrix:
+        """(n * ncomp, ndof) sparse: stress components [MPa] (STRESS_COMPONENTS) at points."""
+        x = np.atleast_2d(np.asarray(points, dtype=float))[:, :self.dim]
+        return self._operator(x, self.locate(x, layer), "stress")
+
+    def __repr__(self):
+        kind = "3D tetra10" if self.dim == 3 else "2D plane-strain triangle6"
+        return (f"Model({kind}, {self.mesh.nelements} elements, {self.ndof} DOFs, layers "
+                f"{sorted(set(self.layer.tolist()))}, material {self.material}, regions {sorted(self.regions)})")
+
+class Solution:
+    """A displacement field and everything derived from it.
+
+    u (ndof,) [mm]; f (ndof,) applied nodal forces [N]; residual: relative solve residual.
+    Strain, stress and measures come from the element holding each point (never averaged).
+    """
+
+    def __init__(self, model: Model, u: np.ndarray, f: np.ndarray | None = None, residual=float("nan")):
+        self.model, self.u, self.residual = model, u, residual
+        self.f = np.zeros(model.ndof) if f is None else f
+
+    @cached_property
+    def displacement_mm(self) -> np.ndarray:
+        """(nnodes, dim) displacement of every P2 node (vertices first)."""
+        return self.u.reshape(-1, self.model.dim)
+
+    @cached_property
+    def nodal_forces(self) -> np.ndarray:
+        """(ndof,) K u [N]: applied loads on free DOFs, reactions on constrained DOFs."""
+        return self.model.K @ self.u
+
+    def force(self, region) -> np.ndarray:
+        """(dim,) resultant force [N] on the body through a region's nodes (load or reaction)."""
+        return self.nodal_forces[self.model.node_dofs(self.model.region_nodes(region))].sum(axis=0)
+
+    @property
+    def energy(self) -> float:
+        """Strain energy u.K.u / 2 [N mm = mJ] (2D: per mm of thickness)."""
+        return 0.5 * float(self.u @ self.nodal_forces)
+
+    def _state(self, x, cells):
+        from fem.measures import State
+
+        m, d, n = self.model, self.model.dim, len(x)
+        disp = np.zeros((n, 3))
+        disp[:, :d] = (m._operator(x, cells, "displacement") @ self.u).reshape(n, d)
+        comps = (m._operator(x, cells, "strain") @ self.u).reshape(n, -1)
+        strain = np.zeros((n, 3, 3))
+        for c, name in enumerate(STRAIN_COMPONENTS[d]):
+            i, j = _INDEX[name[0]], _INDEX[name[1]]
+            strain[:, i, j] = strain[:, j, i] = comps[:, c]
+        tr = np.trace(strain, axis1=1, axis2=2)
+        stress = 2 * m.mu[cells, None, None] * strain + (m.lam[cells] * tr)[:, None, None] * np.eye(3)
+        return State(disp, strain, stress)
+
+    def fields(self, points, names=None, layer=None) -> dict[str, np.ndarray]:
+        """{measure name: (n,) values} at points (n, dim or 3) [mm]; all measures if names is None.
+
+        Also 'element' and 'layer' (n,) of the element that holds each point."""
+        from fem.measures import evaluate
+
+        x = np.atleast_2d(np.asarray(points, dtype=float))[:, :self.model.dim]
+        cells = self.model.locate(x, layer)
+        return {"element": cells, "layer": self.model.layer[cells], **evaluate(names, self._state(x, cells))}
+
+    def sample(self, name: str, points, layer=None) -> np.ndarray:
+        """(n,) values of one measure (see fem.measures.MEASURES) at points [mm]."""
+        return self.fields(points, [name], layer)[name]
+
+    @cached_property
+    def element_fields(self) -> dict[str, np.ndarray]:
+        """{measure name: (M,) value at each element's centroid}."""
+        from fem.measures import evaluate
+
+        m = self.model
+        cells = np.arange(m.mesh.nelements)
+        x = m.mesh.p[:, m.mesh.t].mean(axis=1).T
+        return evaluate(None, self._state(x, cells))
+
+    def save(self, path, points=None, names=None, layer=None) -> None:
+        """Write a quadratic-cell VTU (`path`) and, with `points`, a CSV of samples next to it."""
+        from fem.export import write_csv, write_vtu
+
+        write_vtu(path, self)
+        if points is not None:
+            write_csv(str(path).rsplit(".", 1)[0] + ".csv", points, self.fields(points, names, layer))
