@@ -286,3 +286,36 @@ def load_truth_shape(folder) -> tuple[Shape, dict]:
         shape = Ellipsoid(truth["shape"], p["a"], p["b"], p["c"], tuple(p["centre"]))
     shape.rod_radius_mm = truth["rod_radius_mm"]
     return shape, truth
+
+
+def point_polygon_distance(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
+    """(n,) distance in mm from each point (n, 2) to a closed polygon's boundary (k, 2)."""
+    a = polygon
+    b = np.roll(polygon, -1, axis=0)
+    ab = b - a
+    ap = points[:, None, :] - a[None]
+    t = np.clip((ap * ab).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-300), 0.0, 1.0)
+    d = ap - t[..., None] * ab
+    return np.sqrt((d * d).sum(-1)).min(axis=1)
+
+
+def compare_to_truth(doc: dict, folder) -> dict:
+    """Errors of a sections.json document against the truth behind a rendered folder.
+
+    Distances from reconstructed section points to the true convex section, in mm and px, and
+    the volume of the lofted sections vs the true (convex) volume over the same z range.
+    """
+    shape, truth = load_truth_shape(folder)
+    shift = doc["calibration"]["z_offset_mm"] - truth["z0_s_mm"]     # shape z = z + shift
+    dists = []
+    for sec in doc["sections"]:
+        dists.append(point_polygon_distance(np.array(sec["points"]),
+                                            shape.convex_section(sec["z"] + shift, 1440)))
+    d = np.concatenate(dists)
+    z = np.array([sec["z"] for sec in doc["sections"]])
+    px = truth["mm_per_px"]
+    return {"mean_px": float(d.mean() / px), "max_px": float(d.max() / px),
+            "mean_mm": float(d.mean()), "max_mm": float(d.max()),
+            "per_section_max_px": [float(x.max() / px) for x in dists],
+            "true_volume_mm3": shape.volume_mm3(z[0] + shift, z[-1] + shift),
+            "z_shift_mm": shift}

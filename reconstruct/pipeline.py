@@ -1,0 +1,220 @@
+"""The image stage end to end: turntable folder -> sections.json, surface.stl, report.png."""
+from __future__ import annotations
+
+import time
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+from reconstruct.calibrate import Frame, estimate_axis, sample_borders, template_scale
+from reconstruct.errors import InputError
+from reconstruct.io import staged_output, write_json
+from reconstruct.sections import (N_POINTS, choose_levels, convex_section, fit_support, harmonics_for,
+                                  support_curve, support_samples, tangent_polygon, _design)
+from reconstruct.silhouette import Borders, extract_borders
+from reconstruct.surface import loft
+from reconstruct.turntable import Turntable, load_turntable
+
+ROD_MARGIN_PX = 5          # rows skipped after the rod-to-finger step (blurred corner)
+
+
+@dataclass
+class Reconstruction:
+    """Everything the image stage found; `summary()` is the one-screen report."""
+
+    table: Turntable
+    frame: Frame
+    z_mm: np.ndarray                      # (m,) section positions, 0 at the proximal end
+    sections: list[np.ndarray]            # m arrays (N_POINTS, 2), CCW, finger frame, mm
+    polygons: list[np.ndarray]            # tangent polygons at the same z
+    surface: object                       # trimesh.Trimesh
+    z_offset_mm: float                    # s (mm along the axis from the bottom edge) of z = 0
+    trims: dict
+    axis_fit: dict
+    timings_s: dict
+    warnings: list[str] = field(default_factory=list)
+
+    def summary(self) -> str:
+        sc, fr, t = self.frame.scale, self.frame, self.table
+        dz = np.diff(self.z_mm)
+        lines = [
+            f"views used      {len(t.image_paths)} over {t.coverage_deg:.1f} deg",
+            f"scale           {sc.sx_mm * 1000:.3f} x {sc.sy_mm * 1000:.3f} um/px (aspect {sc.aspect:.4f}, "
+            f"template fit {sc.rms_px:.3f} px rms)",
+            f"rotation axis   offset {fr.offset_px(t.shape_px[1]):+.2f} px "
+            f"from centre, tilt {fr.tilt_deg:+.3f} deg (fit rms {self.axis_fit.get('axis_fit_rms_mm', 0) * 1000:.1f} um)",
+            f"sections        {len(self.z_mm)}, z {self.z_mm[0]:.2f} .. {self.z_mm[-1]:.2f} mm, "
+            f"spacing {dz.min():.2f} .. {dz.max():.2f} mm",
+            f"trimmed         " + "; ".join(f"{k}: {v}" for k, v in self.trims.items()),
+            f"surface         {len(self.surface.faces)} triangles, volume {self.surface.volume:.1f} mm^3, "
+            f"watertight {self.surface.is_watertight}",
+            "timings         " + ", ".join(f"{k} {v:.2f} s" for k, v in self.timings_s.items()),
+        ]
+        return "\n".join(lines + [f"warning: {w}" for w in self.warnings])
+
+
+def _rotate180(b: Borders, width_px: int) -> Borders:
+    """Borders of the same view turned by 180 degrees in the image plane."""
+    return Borders(width_px - 1 - b.right_px[::-1], width_px - 1 - b.left_px[::-1], b.frame_rows[::-1],
+                   b.touches_bottom, b.touches_top, b.threshold, b.background, b.object)
+
+
+def extract_all(table: Turntable, progress: bool = False) -> list[Borders]:
+    """Borders of every view (two threads: OpenCV and NumPy release the GIL)."""
+    def one(path):
+        return extract_borders(table.read(path), name=path.name)
+
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        it = pool.map(one, table.image_paths)
+        return list(tqdm(it, total=len(table.image_paths), desc="silhouettes", unit="view",
+                         disable=not progress))
+
+
+def _trim(s: np.ndarray, width: np.ndarray, rod: bool, tip_fraction: float, ds: float,
+          sy: float) -> tuple[float, float, dict]:
+    """Axial range [s_lo, s_hi] to keep, from the widest-view width profile (NaN: not usable)."""
+    valid = np.isfinite(width)
+    if not valid.any():
+        raise InputError("the finger touches the image frame on every row: zoom out or re-centre it")
+    # largest contiguous run of usable rows
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], valid.astype(int), [0]])))
+    runs = edges.reshape(-1, 2)
+    a, b = runs[np.argmax(runs[:, 1] - runs[:, 0])]
+    s, width = s[a:b], width[a:b]
+    trims = {}
+    if a > 0 or b < len(valid):
+        trims["frame/partial rows"] = f"kept s {s[0]:.2f} .. {s[-1]:.2f} mm"
+    w_max = width.max()
+    lo = 0
+    if rod:
+        rod_w = np.median(width[: max(3, int(0.3 / ds))])
+        if rod_w < 0.5 * w_max:
+            body = np.flatnonzero(width > 1.5 * rod_w)
+            lo = body[0] + int(np.ceil(ROD_MARGIN_PX * sy / ds))
+            trims["rod"] = f"{rod_w:.2f} mm wide, below s {s[lo]:.2f} mm"
+    if lo == 0 and tip_fraction > 0:
+        wide = np.flatnonzero(width >= tip_fraction * w_max)
+        lo = wide[0]
+        if lo > 0:
+            trims["proximal end"] = f"narrower than {tip_fraction:.0%} of the widest section"
+    hi = len(s) - 1
+    if tip_fraction > 0:
+        wide = np.flatnonzero(width[lo:] >= tip_fraction * w_max)
+        hi = lo + wide[-1]
+        if hi < len(s) - 1:
+            trims["tip"] = f"beyond z {s[hi] - s[lo]:.2f} mm (narrower than {tip_fraction:.0%} of the widest)"
+    if s[hi] - s[lo] < 2 * ds:
+        raise InputError("nothing of the finger is left after trimming the rod and tip: check the images")
+    return float(s[lo]), float(s[hi]), trims
+
+
+def reconstruct(table: Turntable, spacing_mm=(0.5, 2.0), tol_mm: float = 0.02,
+                tip_fraction: float = 0.5, progress: bool = False) -> Reconstruction:
+    """Run the image stage on a loaded turntable folder (nothing is written)."""
+    lo, hi = spacing_mm
+    if not 0 < lo <= hi:
+        raise InputError(f"section spacing must satisfy 0 < min <= max, got {lo} .. {hi} mm")
+    if not tol_mm > 0:
+        raise InputError(f"--tol-mm must be positive, got {tol_mm}")
+    if not 0 <= tip_fraction < 1:
+        raise InputError(f"--tip-fraction must be in [0, 1), got {tip_fraction}")
+    timings, warnings = {}, []
+    t0 = time.perf_counter()
+    calib = extract_borders(table.read(table.calibration_path), name=table.calibration_path.name)
+    views = extract_all(table, progress)
+    timings["silhouettes"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    height_px, width_px = table.shape_px
+    top = sum(b.touches_top for b in views)
+    bottom = sum(b.touches_bottom for b in views)
+    if top > bottom:                          # rod enters from the top: turn everything by 180 deg
+        views = [_rotate180(b, width_px) for b in views]
+        calib = _rotate180(calib, width_px)
+    rod = max(top, bottom) > len(views) // 2
+    scale = template_scale(calib, table.template_diameter_mm)
+    frame = Frame(scale, height_px)
+    if table.axis_offset_px is not None or table.tilt_deg is not None:
+        frame.x0_mm = (width_px / 2 + float(table.axis_offset_px or 0.0)) * scale.sx_mm
+        frame.tilt_deg = float(table.tilt_deg or 0.0)
+        axis_fit = {"source": "turntable.toml"}
+    else:
+        frame, axis_fit = estimate_axis(views, table.angles_deg, frame)
+    if table.coverage_deg < 360.0 - 1e-6:
+        warnings.append(f"the views cover {table.coverage_deg:.0f} deg, not 360: each tangent is seen once, "
+                        f"so noise is not averaged and the axis estimate is less certain")
+    timings["calibration"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    ds = scale.sy_mm
+    s_fine = np.arange(0.0, height_px * scale.sy_mm, ds)
+    left, right = sample_borders(views, frame, s_fine)
+    width = np.where(np.isfinite(left).all(axis=0) & np.isfinite(right).all(axis=0),
+                     np.max(right - left, axis=0), np.nan)
+    s_lo, s_hi, trims = _trim(s_fine, width, rod, tip_fraction, ds, scale.sy_mm)
+    inside = (s_fine >= s_lo) & (s_fine <= s_hi)
+    theta = table.angles_deg - table.volar_view_deg
+    phi, h = support_samples(left[:, inside], right[:, inside], theta)
+    k_max = harmonics_for(phi)
+    coef_fine = fit_support(phi, h, k_max)
+    dirs = np.linspace(0, 2 * np.pi, 180, endpoint=False)
+    levels = choose_levels(s_fine[inside], (_design(dirs, k_max) @ coef_fine).T, spacing_mm, tol_mm)
+    left_l, right_l = sample_borders(views, frame, levels)
+    phi, h_l = support_samples(left_l, right_l, theta)
+    curves = support_curve(fit_support(phi, h_l, k_max), N_POINTS)
+    sections = [convex_section(c) for c in curves]
+    polygons = [tangent_polygon(phi, h_l[:, i]) for i in range(len(levels))]
+    z = levels - s_lo
+    surface = loft(z, sections)
+    timings["sections"] = time.perf_counter() - t0
+    return Reconstruction(table, frame, z, sections, polygons, surface, s_lo, trims, axis_fit,
+                          timings, warnings)
+
+
+def sections_document(rec: Reconstruction) -> dict:
+    """The sections.json contract (DESIGN.md)."""
+    sc, fr, t = rec.frame.scale, rec.frame, rec.table
+    return {
+        "units": "mm",
+        "frame": "finger frame: rotation axis at the origin, volar towards +y, z distal from the "
+                 "proximal end; points are closed CCW polygons (first point not repeated)",
+        "sections": [{"z": round(float(z), 5), "points": np.round(p, 5).tolist()}
+                     for z, p in zip(rec.z_mm, rec.sections)],
+        "calibration": {
+            "mm_per_px_x": sc.sx_mm, "mm_per_px_y": sc.sy_mm, "aspect": sc.aspect,
+            "template_diameter_mm": t.template_diameter_mm, "template_fit_rms_px": sc.rms_px,
+            "axis_x0_mm": fr.x0_mm, "axis_tilt_deg": fr.tilt_deg, **rec.axis_fit,
+            "z_offset_mm": rec.z_offset_mm,
+            "z_offset_note": "z = 0 lies z_offset_mm along the axis from where it crosses the bottom "
+                             "image edge (after turning the images so the rod is at the bottom)",
+        },
+        "views": len(t.image_paths),
+        "angles_deg": t.angles_deg.tolist(),
+        "coverage_deg": t.coverage_deg,
+        "volar_view_deg": t.volar_view_deg,
+        "trims": rec.trims,
+        "warnings": rec.warnings,
+        "source": str(t.folder),
+    }
+
+
+def reconstruct_folder(images, out_dir, spacing_mm=(0.5, 2.0), tol_mm: float = 0.02,
+                       tip_fraction: float = 0.5, progress: bool = False) -> Reconstruction:
+    """Reconstruct a turntable folder and write sections.json, surface.stl, report.png to out_dir."""
+    from reconstruct.report import write_report
+
+    table = load_turntable(images)
+    rec = reconstruct(table, spacing_mm, tol_mm, tip_fraction, progress)
+    if not rec.surface.is_watertight:
+        raise InputError("the lofted surface is not watertight (sections degenerate): "
+                         "raise --tip-fraction or check the images")
+    t0 = time.perf_counter()
+    with staged_output(out_dir) as tmp:
+        write_json(Path(tmp) / "sections.json", sections_document(rec))
+        rec.surface.export(Path(tmp) / "surface.stl")
+        write_report(rec, Path(tmp) / "report.png")
+    rec.timings_s["writing"] = time.perf_counter() - t0
+    return rec

@@ -1,0 +1,173 @@
+"""Load a turntable folder: images, view angles, calibration template, manifest; validate up front.
+
+Folder contract (DESIGN.md): images (png/tif/tiff/jpg/jpeg/bmp) of one size; `calibration.*`
+(template image); optional `turntable.toml` with `start_deg` + `step_deg` (angle of the i-th
+view in sorted name order) or an `[angles]` table (file name -> degrees),
+`template_diameter_mm` (default 12.7), `axis` ("vertical" or "horizontal"), `volar_view_deg`
+(default 0). Without a manifest the angles come from names like `view_012.6deg.png`.
+"""
+from __future__ import annotations
+
+import re
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from reconstruct.errors import InputError
+
+IMAGE_SUFFIXES = {".png", ".tif", ".tiff", ".jpg", ".jpeg", ".bmp"}
+_ANGLE_IN_NAME = re.compile(r"(-?\d+(?:\.\d+)?)\s*deg", re.IGNORECASE)
+_MANIFEST_KEYS = {"start_deg", "step_deg", "angles", "template_diameter_mm", "axis",
+                  "volar_view_deg", "axis_offset_px", "tilt_deg"}
+
+
+@dataclass
+class Turntable:
+    """A validated turntable folder. angles_deg: (n,) view angles, sorted as `image_paths`."""
+
+    folder: Path
+    image_paths: list[Path]
+    angles_deg: np.ndarray
+    calibration_path: Path
+    template_diameter_mm: float = 12.7
+    axis: str = "vertical"
+    volar_view_deg: float = 0.0
+    size_px: tuple[int, int] = (0, 0)       # (W, H) as stored on disk
+    axis_offset_px: float | None = None     # manifest override of the estimated axis
+    tilt_deg: float | None = None
+
+    @property
+    def coverage_deg(self) -> float:
+        """Angle covered by the views: 360 minus the largest gap between neighbouring views."""
+        a = np.sort(np.mod(self.angles_deg, 360.0))
+        gaps = np.diff(np.concatenate([a, [a[0] + 360.0]]))
+        return float(360.0 - gaps.max()) + float(np.median(gaps)) if len(a) > 1 else 0.0
+
+    @property
+    def shape_px(self) -> tuple[int, int]:
+        """(rows, cols) of the images as read, i.e. after turning the finger axis vertical."""
+        w, h = self.size_px
+        return (w, h) if self.axis == "horizontal" else (h, w)
+
+    def read(self, path: Path) -> np.ndarray:
+        """Grey image (H, W) uint8, rotated so that the finger axis is vertical."""
+        img = read_grey(path)
+        return np.ascontiguousarray(np.rot90(img, 1)) if self.axis == "horizontal" else img
+
+
+def read_grey(path: Path) -> np.ndarray:
+    """Read any supported image as 8-bit grey (16-bit images are scaled)."""
+    img = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+    if img is None:
+        raise InputError(f"cannot read image '{path}': replace or remove the file")
+    if img.ndim == 3:
+        img = cv2.cvtColor(img, cv2.COLOR_BGRA2GRAY if img.shape[2] == 4 else cv2.COLOR_BGR2GRAY)
+    if img.dtype == np.uint16:
+        img = (img / 257.0).round().astype(np.uint8)
+    elif img.dtype != np.uint8:
+        raise InputError(f"image '{path}' has pixel type {img.dtype}: save it as 8- or 16-bit grey")
+    return img
+
+
+def _read_manifest(folder: Path) -> dict:
+    path = folder / "turntable.toml"
+    if not path.exists():
+        return {}
+    try:
+        manifest = tomllib.loads(path.read_text())
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path} is not valid TOML ({exc}): fix the syntax") from None
+    unknown = set(manifest) - _MANIFEST_KEYS
+    if unknown:
+        raise InputError(f"{path}: unknown key(s) {sorted(unknown)}; known keys: {sorted(_MANIFEST_KEYS)}")
+    return manifest
+
+
+def load_turntable(folder) -> Turntable:
+    """Validate a turntable folder and return it; every problem is an InputError naming the fix."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise InputError(f"turntable folder '{folder}' does not exist: give the folder of the images")
+    files = sorted(p for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+    calib = [p for p in files if p.stem.lower() == "calibration"]
+    views = [p for p in files if p.stem.lower() != "calibration"]
+    if not views:
+        raise InputError(f"no images (png/tif/jpg/bmp) in '{folder}': put the turntable views there")
+    if not calib:
+        raise InputError(f"no calibration image in '{folder}': add the template photo as calibration.png "
+                         f"(or .tif/.jpg), taken at the same zoom")
+    if len(calib) > 1:
+        raise InputError(f"several calibration images in '{folder}' ({', '.join(p.name for p in calib)}): keep one")
+    manifest = _read_manifest(folder)
+    angles = _angles(views, manifest, folder)
+
+    order = np.argsort(angles, kind="stable")
+    views, angles = [views[i] for i in order], angles[order]
+    wrapped = np.mod(angles, 360.0)
+    uniq, counts = np.unique(np.round(wrapped, 6), return_counts=True)
+    if (counts > 1).any():
+        dup = [p.name for p, a in zip(views, np.round(wrapped, 6)) if a in uniq[counts > 1]]
+        raise InputError(f"duplicated view angle(s) {uniq[counts > 1].tolist()} deg ({', '.join(dup[:4])}): "
+                         f"remove the duplicate images or fix the angles")
+
+    sizes = {}
+    for p in views + calib:
+        img = cv2.imread(str(p), cv2.IMREAD_UNCHANGED)
+        if img is None:
+            raise InputError(f"cannot read image '{p}': replace or remove the file")
+        sizes.setdefault((img.shape[1], img.shape[0]), []).append(p.name)
+    if len(sizes) > 1:
+        desc = "; ".join(f"{w}x{h}: {', '.join(n[:2])}{' ...' if len(n) > 2 else ''}"
+                         for (w, h), n in sizes.items())
+        raise InputError(f"images differ in size ({desc}): all views and the template must have one size")
+
+    axis = manifest.get("axis", "vertical")
+    if axis not in ("vertical", "horizontal"):
+        raise InputError(f"turntable.toml: axis must be \"vertical\" or \"horizontal\", not {axis!r}")
+    diameter = float(manifest.get("template_diameter_mm", 12.7))
+    if not diameter > 0:
+        raise InputError(f"turntable.toml: template_diameter_mm must be positive, not {diameter}")
+    table = Turntable(folder, views, angles, calib[0], diameter, axis,
+                      float(manifest.get("volar_view_deg", 0.0)), next(iter(sizes)),
+                      manifest.get("axis_offset_px"), manifest.get("tilt_deg"))
+    if len(views) < 4:
+        raise InputError(f"only {len(views)} view(s) in '{folder}': take at least 4 (about 100 over 360 deg)")
+    if table.coverage_deg < 180.0 - 1e-6:
+        raise InputError(f"the views cover only {table.coverage_deg:.1f} deg of rotation: at least 180 deg "
+                         f"are needed (360 recommended)")
+    return table
+
+
+def _angles(views: list[Path], manifest: dict, folder: Path) -> np.ndarray:
+    """View angles in degrees from the manifest (start/step or [angles]) or the file names."""
+    if "angles" in manifest:
+        table = manifest["angles"]
+        missing = [p.name for p in views if p.name not in table]
+        if missing:
+            raise InputError(f"turntable.toml [angles] has no angle for {', '.join(missing[:4])}"
+                             f"{' ...' if len(missing) > 4 else ''}: add them")
+        extra = sorted(set(table) - {p.name for p in views})
+        if extra:
+            raise InputError(f"turntable.toml [angles] names missing image(s) {', '.join(extra[:4])}: "
+                             f"remove those lines or add the images")
+        if "step_deg" in manifest or "start_deg" in manifest:
+            raise InputError("turntable.toml gives both [angles] and start_deg/step_deg: keep one")
+        return np.array([float(table[p.name]) for p in views])
+    if "step_deg" in manifest:
+        step = float(manifest["step_deg"])
+        if step == 0:
+            raise InputError("turntable.toml: step_deg must not be 0")
+        return float(manifest.get("start_deg", 0.0)) + step * np.arange(len(views))
+    if "start_deg" in manifest:
+        raise InputError("turntable.toml gives start_deg without step_deg: add step_deg")
+    angles = []
+    for p in views:
+        found = _ANGLE_IN_NAME.findall(p.stem)
+        if not found:
+            raise InputError(f"no view angle for '{p.name}': name files like view_012.6deg.png or add "
+                             f"start_deg/step_deg (or an [angles] table) to {folder}/turntable.toml")
+        angles.append(float(found[-1]))
+    return np.array(angles)
