@@ -1,0 +1,167 @@
+"""Contact algorithm on analytic compliances: LCP solver, Hertz on an elastic half-space (Love's
+uniform-pressure cells), force control, two-point equal force, sweeps reusing the cache, errors."""
+import math
+
+import numpy as np
+import pytest
+import scipy.optimize as so
+
+from fem import contact
+from fem.indentors import make_indentor
+from reconstruct.errors import InputError
+
+
+# --------------------------------------------------------------------------- Hertz (Johnson 1985)
+def hertz_sphere(radius_mm, depth_mm, E_MPa, nu):
+    """Rigid sphere on an elastic half-space: (force N, contact radius mm, max pressure MPa)."""
+    Es = E_MPa / (1 - nu * nu)
+    a = math.sqrt(radius_mm * depth_mm)
+    force = 4.0 / 3.0 * Es * math.sqrt(radius_mm) * depth_mm ** 1.5
+    return force, a, 3 * force / (2 * math.pi * a * a)
+
+
+def hertz_cylinder(radius_mm, force_N_per_mm, E_MPa, nu):
+    """Rigid cylinder on an elastic half-plane (plane strain): (half-width mm, max pressure MPa)."""
+    Es = E_MPa / (1 - nu * nu)
+    b = math.sqrt(4 * force_N_per_mm * radius_mm / (math.pi * Es))
+    return b, 2 * force_N_per_mm / (math.pi * b)
+
+
+# --------------------------------------------------------------------------- half-space compliance
+def _love(X, Y):
+    """Antiderivative with d2/dXdY = 1/sqrt(X^2+Y^2) (0 on the axes)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t1 = np.where(X != 0, X * np.arcsinh(Y / np.abs(X)), 0.0)
+        t2 = np.where(Y != 0, Y * np.arcsinh(X / np.abs(Y)), 0.0)
+    return t1 + t2
+
+
+class HalfSpace(contact.Compliance):
+    """Surface nodes on a square grid (spacing h) of an elastic half-space y < 0; each node's
+    force is a uniform pressure over its h x h cell (Love 1929); displacement at cell centres."""
+
+    def __init__(self, xz, h, E, nu):
+        super().__init__(len(xz), 0)
+        self.xz, self.h, self.k = xz, h, (1 - nu * nu) / (math.pi * E) / (h * h)
+
+    def _compute(self, idx):
+        dx = self.xz[:, :1] - self.xz[idx, 0]
+        dz = self.xz[:, 1:] - self.xz[idx, 1]
+        c = 0.5 * self.h
+        F = _love(dx + c, dz + c) - _love(dx - c, dz + c) - _love(dx + c, dz - c) + _love(dx - c, dz - c)
+        return self.k * F
+
+
+def half_space_model(half_width_mm, h, E=1.0, nu=0.3, tilt=0.0):
+    n = int(round(2 * half_width_mm / h))
+    c = (np.arange(n) - (n - 1) / 2) * h
+    X, Z = np.meshgrid(c, c, indexing="ij")
+    xz = np.column_stack([X.ravel(), Z.ravel()])
+    pts = np.column_stack([xz[:, 0], tilt * xz[:, 0], xz[:, 1]])
+    hs = HalfSpace(xz, h, E, nu)
+    return contact.ContactModel(pts, np.full(len(xz), h * h), lambda a: hs), hs
+
+
+def test_love_cells_match_boussinesq_far_away_and_sum():
+    h, E, nu = 0.1, 2.0, 0.3
+    xz = np.array([[0.0, 0.0], [3.0, 0.0], [2.0, 2.0]])
+    col = HalfSpace(xz, h, E, nu).columns([0])[:, 0]
+    r = np.hypot(xz[1:, 0], xz[1:, 1])
+    np.testing.assert_allclose(col[1:], (1 - nu * nu) / (math.pi * E * r), rtol=1e-3)
+    # centre of a uniformly loaded square of side 2c: int dA/r = 8 c ln(1 + sqrt 2), p = 1/h^2
+    centre = (1 - nu * nu) / (math.pi * E) * (1 / h ** 2) * 8 * (h / 2) * math.log(1 + math.sqrt(2))
+    assert math.isclose(col[0], centre, rel_tol=1e-12)
+
+
+# --------------------------------------------------------------------------- LCP
+@pytest.mark.parametrize("seed", range(5))
+def test_lcp_matches_nnls_and_satisfies_kkt(seed):
+    rng = np.random.default_rng(seed)
+    n = 60
+    G = rng.normal(size=(n, n))
+    C = G @ G.T / n + 0.05 * np.eye(n)
+    q = rng.normal(size=n)
+    sol = contact.solve_lcp(lambda i: C[:, i], q)
+    f, g = sol.force, sol.gap
+    assert f.min() >= 0 and g.min() >= -contact.GAP_TOL_MM
+    assert np.abs(f * g).max() < 1e-9
+    L = np.linalg.cholesky(C)                       # min |L^T f + L^-1 q|^2, f >= 0
+    ref, _ = so.nnls(L.T, -np.linalg.solve(L, q))
+    np.testing.assert_allclose(f, ref, atol=1e-8)
+
+
+# --------------------------------------------------------------------------- Hertz on the half-space
+@pytest.mark.parametrize("nu", [0.3, 0.49])
+def test_hertz_sphere_on_half_space(nu):
+    """Force and contact radius within 3 % of Hertz for depths 0.05-0.3 mm (R = 5 mm)."""
+    E, R = 1.0, 5.0
+    model, hs = half_space_model(1.4, 0.05, E, nu)
+    sph = make_indentor(f"sphere:{R}", position_mm=(0.0, 0.0))
+    results = model.indent_depths(sph, [0.05, 0.1, 0.2, 0.3])
+    for res in results:
+        d = float(res.depth_mm[0])
+        F, a, p0 = hertz_sphere(R, d, E, nu)
+        assert res.kkt["ok"], res.kkt
+        assert abs(res.total_force_N / F - 1) < 0.03
+        radius = math.sqrt(res.contact_area_mm2 / math.pi)
+        assert abs(radius / a - 1) < 0.03, (d, radius, a)
+        assert abs(res.max_pressure_MPa / p0 - 1) < 0.05
+    # lazy: columns were built for little more than the final contact zone, not the whole grid
+    assert hs.computed < 1.25 * results[-1].active.sum() < 0.75 * len(hs.xz)
+
+
+def test_force_control_inverts_depth_control():
+    E, nu, R = 1.0, 0.49, 5.0
+    model, _ = half_space_model(1.2, 0.05, E, nu)
+    sph = make_indentor(f"sphere:{R}")
+    target = hertz_sphere(R, 0.2, E, nu)[0]
+    res = model.indent(sph, force_N=target)
+    assert abs(res.total_force_N / target - 1) <= contact.FORCE_RTOL
+    assert abs(res.depth_mm[0] - 0.2) < 0.006          # Hertz depth within 3 %
+    again = model.indent(sph, depth_mm=float(res.depth_mm[0]))
+    np.testing.assert_allclose(again.force_N, res.force_N, atol=1e-9 * target)
+    with pytest.raises(InputError, match="not reached"):
+        model.indent(sph, force_N=1e3, max_depth_mm=0.5)
+
+
+def test_two_point_equal_force_vs_equal_depth():
+    """On a tilted surface the lower tip touches first: equal depth gives unequal forces, equal
+    force gives equal forces at unequal tip travels."""
+    model, _ = half_space_model(2.0, 0.08, tilt=0.05)
+    tp = make_indentor("two-point:2:1.0")            # two spheres of radius 1 mm, 2 mm apart
+    eq_d = model.indent(tp, depth_mm=0.2)
+    fd = eq_d.part_force_N
+    assert fd[1] > 1.5 * fd[0] > 0                  # the +x tip sits on the higher side
+    target = 0.5 * fd.sum()
+    eq_f = model.indent(tp, force_N=target, equal_force=True)
+    np.testing.assert_allclose(eq_f.part_force_N, target, rtol=2e-6)
+    # same tips on a (tilted) half-space: equal own depths, travels differ by the 0.1 mm tilt
+    assert abs(eq_f.depth_mm[1] / eq_f.depth_mm[0] - 1) < 0.01
+    assert abs(eq_f.travel_mm[0] - eq_f.travel_mm[1] - 0.1) < 0.002
+    assert eq_f.kkt["ok"]
+
+
+def test_sweep_reuses_columns_and_matches_fresh_solves():
+    model, hs = half_space_model(1.5, 0.1)
+    bar = make_indentor("C3", orientation="parallel")
+    offs = np.column_stack([np.linspace(-0.5, 0.5, 11), np.zeros(11), np.zeros(11)])
+    out = model.sweep(bar, offs, depth_mm=0.1)
+    built = hs.computed
+    assert built < sum(int(r.active.sum()) for r in out)     # the cache is shared
+    for off, r in zip(offs[::5], out[::5]):
+        fresh, _ = half_space_model(1.5, 0.1)
+        ref = fresh.indent(bar.shifted(off), depth_mm=0.1)
+        np.testing.assert_allclose(r.force_N, ref.force_N, atol=1e-12)
+        assert r.kkt["ok"]
+    with pytest.raises(InputError, match="sweep position"):
+        model.sweep(make_indentor("punch:1"), [[0, 0, 0], [9, 0, 0]], depth_mm=0.1)
+
+
+def test_bad_requests():
+    model, _ = half_space_model(1.0, 0.1)
+    with pytest.raises(InputError, match="never touches"):
+        model.indent(make_indentor("sphere:1", position_mm=(5.0, 0.0)), depth_mm=0.1)
+    with pytest.raises(InputError):
+        model.indent(make_indentor("sphere:1"), depth_mm=0.1, force_N=1.0)
+    with pytest.raises(InputError):
+        model.indent(make_indentor("sphere:1"), depth_mm=-0.1)
