@@ -1,0 +1,169 @@
+"""Closed-form elasticity solutions and the structured meshes used to verify the solver against them.
+
+Units mm, N, MPa; stresses tension-positive. Half-space problems use the project's axes: the
+surface is y = 0, the body is y < 0, and the load pushes along -y (as an indentor does).
+
+Meshes are returned as (points (N, dim), cells (M, dim + 1), regions {name: bool (N,)}).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+# --------------------------------------------------------------------------- closed forms
+def lame_sphere(r, a, b, p, E, nu):
+    """Thick sphere, inner radius a, outer b, internal pressure p.
+
+    Returns u_r [mm], sigma_rr, sigma_tt (hoop) and mean stress [MPa] at radii r."""
+    r = np.asarray(r, dtype=float)
+    A = p * a**3 / (b**3 - a**3)
+    return {"u_r": A / E * ((1 - 2 * nu) * r + (1 + nu) * b**3 / (2 * r**2)),
+            "sigma_rr": A * (1 - b**3 / r**3), "sigma_tt": A * (1 + b**3 / (2 * r**3)),
+            "mean": A * np.ones_like(r)}
+
+
+def lame_cylinder(r, a, b, p, E, nu):
+    """Thick cylinder in plane strain, inner radius a, outer b, internal pressure p.
+
+    Returns u_r [mm], sigma_rr, sigma_tt, sigma_zz and mean stress [MPa] at radii r."""
+    r = np.asarray(r, dtype=float)
+    A = p * a**2 / (b**2 - a**2)
+    return {"u_r": (1 + nu) * A / E * ((1 - 2 * nu) * r + b**2 / r),
+            "sigma_rr": A * (1 - b**2 / r**2), "sigma_tt": A * (1 + b**2 / r**2),
+            "sigma_zz": 2 * nu * A * np.ones_like(r), "mean": 2 * (1 + nu) / 3 * A * np.ones_like(r)}
+
+
+def lame_traction(a, b, p, E, nu):
+    """Traction sigma_exact . n of the Lame field (sphere if x is 3D, plane-strain cylinder if 2D)
+    as a callable (x, n) -> (dim, ...) for `Model.load_vector(tractions=...)`.
+
+    On a faceted mesh of the shell, loading both faceted surfaces with this traction makes the Lame
+    field the exact solution of the discrete geometry, so the error measured is the solver's alone
+    (a uniform pressure on facets adds an O(h^2) geometry error and re-entrant-edge singularities)."""
+    def traction(x, n):
+        r = np.sqrt((x**2).sum(axis=0))
+        ex = (lame_sphere if len(x) == 3 else lame_cylinder)(r, a, b, p, E, nu)
+        er = x / r
+        return ex["sigma_tt"] * n + (ex["sigma_rr"] - ex["sigma_tt"]) * (er * n).sum(axis=0) * er
+    return traction
+
+
+def flamant(x, y, P):
+    """Line load P [N/mm] pushing along -y at the origin of the half-plane y < 0.
+
+    sigma_r = -2 P cos(theta) / (pi r) with theta from the load direction; returns
+    (sigma_xx, sigma_yy, sigma_xy) [MPa] at (x, y)."""
+    x, d = np.asarray(x, dtype=float), -np.asarray(y, dtype=float)
+    r4 = (x**2 + d**2) ** 2
+    return -2 * P * x**2 * d / (np.pi * r4), -2 * P * d**3 / (np.pi * r4), 2 * P * x * d**2 / (np.pi * r4)
+
+
+def boussinesq(x, y, z, P, E, nu):
+    """Point load P [N] pushing along -y at the origin of the half-space y < 0.
+
+    Returns displacement (n, 3) [mm] and stress (n, 3, 3) [MPa] (Johnson, Contact Mechanics, 3.2)."""
+    x, z = np.asarray(x, dtype=float), np.asarray(z, dtype=float)
+    d = -np.asarray(y, dtype=float)                       # depth
+    s = np.hypot(x, z)                                    # distance from the load axis
+    R = np.sqrt(s**2 + d**2)
+    G = E / (2 * (1 + nu))
+    ud = P / (4 * np.pi * G) * (d**2 / R**3 + 2 * (1 - nu) / R)          # along depth (-y)
+    ur = P / (4 * np.pi * G) * (s * d / R**3 - (1 - 2 * nu) * s / (R * (R + d)))
+    srr = P / (2 * np.pi) * ((1 - 2 * nu) / (R * (R + d)) - 3 * d * s**2 / R**5)
+    stt = -P / (2 * np.pi) * (1 - 2 * nu) * (1 / (R * (R + d)) - d / R**3)
+    sdd = -3 * P * d**3 / (2 * np.pi * R**5)
+    srd = -3 * P * s * d**2 / (2 * np.pi * R**5)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        c, sn = np.where(s > 0, x / s, 1.0), np.where(s > 0, z / s, 0.0)
+    u = np.stack([ur * c, -ud, ur * sn], axis=-1)
+    sig = np.zeros(x.shape + (3, 3))
+    sig[..., 0, 0] = srr * c**2 + stt * sn**2
+    sig[..., 2, 2] = srr * sn**2 + stt * c**2
+    sig[..., 0, 2] = sig[..., 2, 0] = (srr - stt) * c * sn
+    sig[..., 1, 1] = sdd
+    sig[..., 0, 1] = sig[..., 1, 0] = -srd * c             # depth axis is -y
+    sig[..., 2, 1] = sig[..., 1, 2] = -srd * sn
+    return u, sig
+
+
+def plane_strain_sed_incompressible(E, eps1):
+    """Thesis appendix A: plane strain, nu = 0.5: SED = (2/3) E eps1^2 [MPa]."""
+    return 2.0 / 3.0 * E * eps1**2
+
+
+# --------------------------------------------------------------------------- structured meshes
+def _prisms_to_tets(tri, nlayers, nverts):
+    """Split prisms (triangle x radial layer) into 3 tets each, conforming (diagonals from the
+    lower-index bottom vertex)."""
+    tri = np.sort(tri, axis=1)
+    cells = []
+    for k in range(nlayers):
+        a, b, c = (tri[:, i] + k * nverts for i in range(3))
+        A, B, C = a + nverts, b + nverts, c + nverts
+        cells += [np.column_stack(q) for q in ((a, b, c, C), (a, b, B, C), (a, A, B, C))]
+    return np.vstack(cells)
+
+
+def _triangle_grid(n):
+    """Barycentric grid of the unit triangle with n divisions: points (m, 3) summing to 1, tris."""
+    ij = [(i, j) for i in range(n + 1) for j in range(n + 1 - i)]
+    index = {q: k for k, q in enumerate(ij)}
+    lam = np.array([(i / n, j / n, 1 - (i + j) / n) for i, j in ij])
+    tris = []
+    for i, j in ij:
+        if i + j < n:
+            tris.append((index[i, j], index[i + 1, j], index[i, j + 1]))
+        if i + j < n - 1:
+            tris.append((index[i + 1, j], index[i + 1, j + 1], index[i, j + 1]))
+    return lam, np.array(tris)
+
+
+def graded(r0, r1, n, ratio=1.0):
+    """n + 1 values from r0 to r1 with successive spacings growing by `ratio`."""
+    w = ratio ** np.arange(n)
+    return r0 + (r1 - r0) * np.concatenate([[0], np.cumsum(w) / w.sum()])
+
+
+def sphere_octant_shell(a, b, n_arc, n_rad, ratio=1.0):
+    """Octant (x, y, z >= 0) of a spherical shell a <= r <= b as tetrahedra.
+
+    Regions: inner, outer, sym_x (x = 0), sym_y, sym_z."""
+    lam, tri = _triangle_grid(n_arc)
+    direction = lam / np.linalg.norm(lam, axis=1, keepdims=True)
+    radii = graded(a, b, n_rad, ratio)
+    pts = np.vstack([r * direction for r in radii])
+    cells = _prisms_to_tets(tri, n_rad, len(lam))
+    rr = np.repeat(radii, len(lam))
+    regions = {"inner": np.isclose(rr, a), "outer": np.isclose(rr, b),
+               **{f"sym_{c}": np.isclose(pts[:, i], 0.0) for i, c in enumerate("xyz")}}
+    return pts, cells, regions
+
+
+def annulus_quarter(a, b, n_arc, n_rad, ratio=1.0):
+    """Quarter annulus (x, y >= 0), a <= r <= b, as triangles. Regions: inner, outer, sym_x, sym_y."""
+    r = graded(a, b, n_rad, ratio)
+    t = np.linspace(0, np.pi / 2, n_arc + 1)
+    R, T = np.meshgrid(r, t, indexing="ij")
+    pts = np.column_stack([(R * np.cos(T)).ravel(), (R * np.sin(T)).ravel()])
+    idx = np.arange(R.size).reshape(R.shape)
+    q = np.column_stack([idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()])
+    cells = np.vstack([q[:, [0, 1, 2]], q[:, [0, 2, 3]]])
+    rr = R.ravel()
+    regions = {"inner": np.isclose(rr, a), "outer": np.isclose(rr, b),
+               "sym_x": np.isclose(pts[:, 0], 0.0), "sym_y": np.isclose(pts[:, 1], 0.0)}
+    return pts, cells, regions
+
+
+def box(xs, ys, zs=None):
+    """Structured box on the grids xs, ys (, zs): triangles (2D) or tetrahedra (3D).
+
+    Regions: xmin, xmax, ymin, ymax (, zmin, zmax)."""
+    from skfem import MeshTet, MeshTri
+
+    m = MeshTri.init_tensor(xs, ys) if zs is None else MeshTet.init_tensor(xs, ys, zs)
+    pts = m.p.T
+    regions = {}
+    for i, c in enumerate("xyz"[:pts.shape[1]]):
+        regions[f"{c}min"] = np.isclose(pts[:, i], pts[:, i].min())
+        regions[f"{c}max"] = np.isclose(pts[:, i], pts[:, i].max())
+    return pts, m.t.T, regions
