@@ -324,9 +324,9 @@ class Model:
     def surface_nodes(self, name, midside=True) -> SurfaceNodes:
         """Nodes of region `name`'s facets with outward unit normals and tributary areas.
 
-        Areas split each facet among its nodes: 3D with midside nodes A/12 per vertex and A/4 per
-        edge node (the facet cut into 4 triangles, each shared by its corners); 2D with midside
-        L/6 and 2L/3 (Simpson); without midside nodes A/3 (3D) or L/2 (2D) per vertex.
+        Areas split each quadratic facet into its linear sub-facets, each shared equally by its
+        corners (as fem.contact.trace_areas): 3D A/12 per vertex and A/4 per edge node, 2D L/4 and
+        L/2; without midside nodes A/3 (3D) or L/2 (2D) per vertex.
         """
         facets = self.region_facets(name)
         fv = self.mesh.facets[:, facets]                                    # (dim, nf)
@@ -341,13 +341,13 @@ class Model:
         flip = np.einsum("ij,ij->i", nvec, x.mean(axis=1).T - inner) < 0
         nvec[flip] *= -1
         unit = nvec / np.linalg.norm(nvec, axis=1, keepdims=True)
-        vshare = (1 / 12 if self.dim == 3 else 1 / 6) if midside else 1 / self.dim
+        vshare = (1 / 12 if self.dim == 3 else 1 / 4) if midside else 1 / self.dim
         ids = [fv.ravel()]
         weights = [np.tile(size * vshare, self.dim)]
         if midside:
             mids = (self.mesh.f2e[:, facets] if self.dim == 3 else facets[None]) + self.mesh.nvertices
             ids.append(mids.ravel())
-            weights.append(np.tile(size * (0.25 if self.dim == 3 else 2 / 3), mids.shape[0]))
+            weights.append(np.tile(size * (0.25 if self.dim == 3 else 0.5), mids.shape[0]))
         ids, weights = np.concatenate(ids), np.concatenate(weights)
         nodes, inv = np.unique(ids, return_inverse=True)
         area = np.bincount(inv, weights=weights, minlength=len(nodes))
@@ -495,15 +495,16 @@ class Model:
             dofs.append(d)
             vals.append(v)
         rigid = np.isin(self.layer, list(self.material.rigid))
-        used = np.zeros(self.ndof, dtype=bool)
-        used[self.basis.element_dofs[:, ~rigid].ravel()] = True
-        held = np.flatnonzero(~used)                # rigid-layer and unused nodes: zero displacement
+        held = np.ones(self.ndof, dtype=bool)       # rigid-layer nodes (interfaces too), unused nodes
+        held[self.basis.element_dofs[:, ~rigid].ravel()] = False
+        held[self.basis.element_dofs[:, rigid].ravel()] = True
+        held = np.flatnonzero(held)
         dofs.append(held)
         vals.append(np.zeros(len(held)))
         dofs, vals = np.concatenate(dofs), np.concatenate(vals)
         order = np.lexsort((vals, dofs))
         dofs, vals = dofs[order], vals[order]
-        first = np.r_[True, dofs[1:] != dofs[:-1]]
+        first = np.r_[True, dofs[1:] != dofs[:-1]][:len(dofs)]
         clash = ~first & (np.abs(np.diff(vals, prepend=0.0)) > 1e-12 * (1 + np.abs(vals)))
         if clash.any():
             raise InputError(f"{int(clash.sum())} DOFs get two different prescribed displacements "
@@ -609,7 +610,7 @@ class Model:
         X = self._reference(x, cells)[:, :, None]
         fields = [self.basis.elem.gbasis(self.basis.mapping, X, k, tind=cells)[0]
                   for k in range(self.basis.Nbfun)]
-        return (np.array([f.value[..., 0] for f in fields]), np.array([f.grad[..., 0] for f in fields]))
+        return (np.array([np.asarray(f)[..., 0] for f in fields]), np.array([f.grad[..., 0] for f in fields]))
 
     def _operator(self, x, cells, quantity):
         """Sparse (n * ncomp, ndof) map from u to `quantity` at points x (n, dim) in `cells`."""
