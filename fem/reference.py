@@ -167,3 +167,21 @@ def box(xs, ys, zs=None):
         regions[f"{c}min"] = np.isclose(pts[:, i], pts[:, i].min())
         regions[f"{c}max"] = np.isclose(pts[:, i], pts[:, i].max())
     return pts, m.t.T, regions
+
+
+def half_disc(r0, R, n_rad, n_arc, ratio=1.0):
+    """Half disc y <= 0 of radius R about the origin, rings graded from r0 (a fan inside r0).
+
+    Regions: surface (y = 0), far (r = R), patch (surface nodes with |x| <= r0)."""
+    r = graded(r0, R, n_rad, ratio)
+    th = np.linspace(-np.pi, 0, n_arc + 1)
+    Rg, T = np.meshgrid(r, th, indexing="ij")
+    pts = np.vstack([[0.0, 0.0], np.column_stack([(Rg * np.cos(T)).ravel(), (Rg * np.sin(T)).ravel()])])
+    idx = 1 + np.arange(Rg.size).reshape(Rg.shape)
+    q = np.column_stack([idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()])
+    fan = np.column_stack([np.zeros(n_arc, dtype=int), idx[0, :-1], idx[0, 1:]])
+    cells = np.vstack([fan, q[:, [0, 1, 2]], q[:, [0, 2, 3]]])
+    x, y = pts[:, 0], pts[:, 1]
+    surface = np.isclose(y, 0.0)
+    return pts, cells, {"surface": surface, "far": np.isclose(np.hypot(x, y), R),
+                        "patch": surface & (np.abs(x) <= r0 * (1 + 1e-9))}

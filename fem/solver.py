@@ -459,7 +459,8 @@ class Model:
     @staticmethod
     def _field(value, x, shape, n=None):
         if callable(value):
-            return np.asarray(value(x) if n is None else value(x, n), dtype=float)
+            x = np.asarray(x)                 # plain arrays: skfem's DiscreteField ignores item assignment
+            return np.asarray(value(x) if n is None else value(x, np.asarray(n)), dtype=float)
         value = np.asarray(value, dtype=float)
         if value.shape != shape:
             raise InputError(f"load value has shape {value.shape}, expected {shape}")
