@@ -16,14 +16,19 @@ active: they are computed lazily with the factorised stiffness, many right-hand 
 and cached, so sweeps and depth or force iterations reuse them. Every solve reports its KKT
 residuals (penetration, tensile force, complementarity).
 
-Contact pressure is nodal-force based: f_i / A_i. Contact area is the sum of the tributary
-areas of the nodes carrying force (node-based; in 2D it is the contact width per unit length).
+Contact pressure is recovered from the nodal forces: nodal force / tributary area, averaged over
+each surface facet and back to the nodes (`smoothed_pressure`) when the facets are known, plain
+f_i / A_i otherwise. Contact area is the sum of the tributary areas of the nodes carrying force
+(node-based; in 2D it is the contact width per unit length).
 Quantities at other points (receptor strains, deflections) are an observation matrix O times the
 displacement: their response to the contact forces is cached column by column too, so receptor
 strains cost a small matrix times the contact forces per indentation.
 
-P2 meshes: every trace node (vertices and edge midpoints) is a contact node; tributary areas
-split each quadratic facet into its linear sub-facets (`trace_areas`).
+P2 meshes: every trace node (vertices and edge midpoints) is a contact node with the solver's
+tributary areas. Node-to-surface constraints on P2 give accurate force, contact size and
+deflection (Hertz within 3 %, tests/test_contact_fe.py) but nodal forces alternate between vertex
+and midside nodes (about 1 : 2 against a consistent load), so raw f_i / A_i overstates the peak
+pressure by about a third: hence the facet-averaged pressure.
 
     model = ContactModel.from_solver(solve, n_dofs, points_mm, dofs, areas_mm2, observe=O)
     res = model.indent(indentor, depth_mm=1.0)          # or force_N=0.2, equal_force=True
@@ -46,31 +51,35 @@ FORCE_RTOL = 1e-6
 MAX_DEPTH_MM = 5.0
 
 
-# --------------------------------------------------------------------------- tributary areas
-def trace_areas(points, facets) -> np.ndarray:
-    """(n_points,) tributary area (3D, mm^2) or length (2D, mm) of every node of surface facets.
+# --------------------------------------------------------------------------- facets and pressure
+def facet_shares(facets, facet_area, dim) -> np.ndarray:
+    """(k, n_per_facet) share of each facet's area given to each of its nodes.
 
-    facets: (k, 3) linear or (k, 6) quadratic triangles (vertices, then midpoints of edges
-    01, 12, 20), or (k, 2) linear or (k, 3) quadratic segments (ends, then midpoint) when points
-    are 2D. A quadratic facet is split into its linear sub-facets; each sub-facet gives an equal
-    share to its nodes.
+    facets: (k, n) node indices (vertices first, then midside nodes); facet_area: (k,) mm^2 (mm
+    in 2D). P2 shares as `fem.solver.Model.surface_nodes` (the facet cut into its linear
+    sub-facets): 3D 1/12 per vertex and 1/4 per edge node, 2D 1/4 and 1/2; P1: equal shares.
     """
-    p = np.asarray(points, float)
-    f = np.asarray(facets)
-    dim = p.shape[1]
-    if dim == 2 and f.shape[1] == 3:
-        f = np.vstack([f[:, [0, 2]], f[:, [2, 1]]])
-    elif dim == 3 and f.shape[1] == 6:
-        f = np.vstack([f[:, [0, 3, 5]], f[:, [3, 1, 4]], f[:, [5, 4, 2]], f[:, [3, 4, 5]]])
-    if dim == 2 and f.shape[1] == 2:
-        size = np.linalg.norm(p[f[:, 1]] - p[f[:, 0]], axis=1)
-    elif dim == 3 and f.shape[1] == 3:
-        size = 0.5 * np.linalg.norm(np.cross(p[f[:, 1]] - p[f[:, 0]], p[f[:, 2]] - p[f[:, 0]]), axis=1)
+    n = facets.shape[1]
+    if n == dim:
+        w = np.full(n, 1.0 / n)
     else:
-        raise ValueError(f"facets of shape {facets.shape} do not fit {dim}D points")
-    out = np.zeros(len(p))
-    np.add.at(out, f.ravel(), np.repeat(size / f.shape[1], f.shape[1]))
-    return out
+        w = np.array([1 / 12] * 3 + [1 / 4] * 3) if dim == 3 else np.array([1 / 4, 1 / 4, 1 / 2])
+    return np.outer(facet_area, w)
+
+
+def smoothed_pressure(force_N, facets, shares) -> np.ndarray:
+    """(m,) contact pressure [MPa] recovered from nodal forces (m,) on facets (k, n) with area
+    shares (k, n): each node's force is spread over its facets in proportion to their shares,
+    giving a mean pressure per facet; a node's pressure is the share-weighted mean of its facets.
+    Exact for uniform pressure whatever the split of force between vertex and midside nodes
+    (node-to-surface contact on P2 loads midside nodes about twice as much as vertices)."""
+    area = np.bincount(facets.ravel(), shares.ravel(), minlength=len(force_N))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        per_area = np.where(area > 0, force_N / area, 0.0)
+    p_facet = (per_area[facets] * shares).sum(axis=1) / shares.sum(axis=1)
+    num = np.bincount(facets.ravel(), (shares * p_facet[:, None]).ravel(), minlength=len(force_N))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(area > 0, num / area, 0.0)
 
 
 # --------------------------------------------------------------------------- compliance
@@ -222,7 +231,7 @@ class ContactResult:
     gap_mm: np.ndarray              # (m,) gap after deformation (inf outside the footprint)
     deflection_mm: np.ndarray       # (m,) displacement along the approach direction
     part: np.ndarray                # (m,) index of the indentor part facing each node
-    pressure_MPa: np.ndarray        # (m,) nodal force / tributary area
+    pressure_MPa: np.ndarray        # (m,) contact pressure (facet-averaged nodal force / area)
     area_mm2: np.ndarray            # (m,) tributary areas
     observed: np.ndarray            # (r,) observation operator applied to the displacement
     kkt: dict = field(default_factory=dict)
@@ -264,17 +273,37 @@ class ContactModel:
     """Candidate contact nodes of one body and their cached compliance per approach direction.
 
     points_mm: (m, dim) undeformed candidate node positions (dim 2: plane strain in x-y);
-    areas_mm2: (m,) tributary areas (`trace_areas`); compliance_for: callable direction (3,) ->
-    Compliance (one per approach direction, cached here).
+    areas_mm2: (m,) tributary areas; compliance_for: callable direction (3,) -> Compliance (one
+    per approach direction, cached here); facets: optional ((k, n) candidate-local node indices,
+    (k, n) area shares) for the pressure recovery (`facet_shares`).
     """
 
-    def __init__(self, points_mm, areas_mm2, compliance_for, tol_mm: float = GAP_TOL_MM):
+    def __init__(self, points_mm, areas_mm2, compliance_for, tol_mm: float = GAP_TOL_MM, facets=None):
         self.points_mm = np.asarray(points_mm, float)
         self.areas_mm2 = np.asarray(areas_mm2, float)
+        self.facets = facets
         self._compliance_for = compliance_for
         self._compliance = {}
         self.tol_mm = tol_mm
         self._warm = None
+
+    @classmethod
+    def from_fe(cls, model, system, region: str, observe=None, chunk=64, **kw):
+        """Contact on the nodes of `region` of a `fem.solver.Model`, with its factorised
+        `LinearSystem` (constraints applied); observe: optional sparse (r, ndof) operator
+        (e.g. `model.strain_operator(receptors)`) whose response is cached with the columns."""
+        sn = model.surface_nodes(region)
+        mesh, fids = model.mesh, model.region_facets(region)
+        fv = mesh.facets[:, fids]
+        mids = mesh.f2e[:, fids] if model.dim == 3 else fids[None]
+        facets = np.searchsorted(sn.nodes, np.vstack([fv, mids + mesh.nvertices]).T)
+        x = mesh.p[:, fv]
+        if model.dim == 3:
+            size = 0.5 * np.linalg.norm(np.cross((x[:, 1] - x[:, 0]).T, (x[:, 2] - x[:, 0]).T), axis=1)
+        else:
+            size = np.linalg.norm(x[:, 1] - x[:, 0], axis=0)
+        return cls.from_solver(system.solve, model.ndof, sn.x, sn.dofs, sn.area, observe=observe,
+                               chunk=chunk, facets=(facets, facet_shares(facets, size, model.dim)), **kw)
 
     @classmethod
     def from_solver(cls, solve, n_dofs, points_mm, dofs, areas_mm2, observe=None, chunk=64, **kw):
@@ -315,8 +344,11 @@ class ContactModel:
         w = comp.columns(act) @ f[act] if act.size else np.zeros(m)
         obs = comp.observed(act) @ f[act] if act.size else np.zeros(comp.r)
         g = gap0 + w
-        with np.errstate(divide="ignore", invalid="ignore"):
-            pressure = np.where(f > 0, f / self.areas_mm2, 0.0)
+        if self.facets is not None:
+            pressure = smoothed_pressure(f, *self.facets)
+        else:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                pressure = np.where(f > 0, f / self.areas_mm2, 0.0)
         t0 = self.first_touch_mm(indentor)
         res = ContactResult(indentor.name, travel - t0, travel.copy(), f, g, w, part, pressure,
                             self.areas_mm2, obs, _kkt(f[sub], g[sub], self.tol_mm))

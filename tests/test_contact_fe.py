@@ -1,0 +1,76 @@
+"""Contact on the P2 finite-element solver: Hertz cylinder on a plane-strain half-plane, Hertz
+sphere on a quarter block, condensed answers against a full re-solve, receptor strains."""
+import math
+
+import numpy as np
+import pytest
+from skfem import MeshTri
+
+from fem.contact import ContactModel
+from fem.indentors import make_indentor
+from fem.solver import Model
+from test_contact import hertz_cylinder
+
+
+def graded(fine_mm, fine_len_mm, growth, total_mm):
+    """Coordinates 0..total: uniform cells fine_mm up to fine_len_mm, then growing by `growth`."""
+    x = list(np.arange(0.0, fine_len_mm + 1e-9, fine_mm))
+    h = fine_mm
+    while x[-1] < total_mm:
+        h *= growth
+        x.append(x[-1] + h)
+    return np.array(x)
+
+
+def half_plane(nu, fine_mm=0.02, size_mm=40.0):
+    """Half of a plane-strain block (x >= 0 symmetric, y <= 0, bottom fixed), E = 1 MPa."""
+    xs = graded(fine_mm, 1.3, 1.25, size_mm / 2)
+    ys = -graded(fine_mm, 0.6, 1.2, size_mm / 2)[::-1]
+    m = MeshTri.init_tensor(xs, ys)
+    p = m.p.T
+    regions = {"top": np.isclose(p[:, 1], 0), "bottom": np.isclose(p[:, 1], ys[0]),
+               "sym": np.isclose(p[:, 0], 0)}
+    model = Model(p, m.t.T, np.ones(m.t.shape[1], int), regions, material=[1.0], nu=nu)
+    return model, model.system({"bottom": 0.0, "sym": (0.0, None)})
+
+
+@pytest.mark.parametrize("nu", [0.3, 0.49])
+def test_hertz_cylinder_on_half_plane(nu):
+    """Force control: contact half-width and peak pressure within 3 % of Hertz (b = 0.3-1 mm)."""
+    model, system = half_plane(nu)
+    cm = ContactModel.from_fe(model, system, "top")
+    sn = model.surface_nodes("top")
+    np.testing.assert_allclose(np.bincount(cm.facets[0].ravel(), cm.facets[1].ravel()), sn.area)
+    cyl = make_indentor("cylinder:10", orientation="parallel")          # R = 5 mm, axis along z
+    Es = 1.0 / (1 - nu * nu)
+    for b in [0.3, 0.5, 0.75, 1.0]:
+        P = b * b * math.pi * Es / 20.0                                    # N/mm for half-width b
+        res = cm.indent(cyl, force_N=P / 2)                                 # half model
+        b_ref, p0 = hertz_cylinder(5.0, P, 1.0, nu)
+        assert res.kkt["ok"], res.kkt
+        assert abs(res.total_force_N / (P / 2) - 1) < 1e-5
+        assert abs(res.contact_area_mm2 / b_ref - 1) < 0.03, (b, res.contact_area_mm2, b_ref)
+        assert abs(res.max_pressure_MPa / p0 - 1) < 0.03, (b, res.max_pressure_MPa, p0)
+
+
+def test_condensed_matches_full_resolve_and_receptor_strains():
+    """The cached compliance predicts the deflection and strains that one full solve with the
+    contact forces gives; active nodes touch, inactive ones do not penetrate."""
+    model, system = half_plane(0.48, fine_mm=0.05, size_mm=20.0)
+    receptors = np.column_stack([np.linspace(0.0, 2.0, 9), np.full(9, -0.75)])
+    S = model.strain_operator(receptors)
+    cm = ContactModel.from_fe(model, system, "top", observe=S)
+    sn = model.surface_nodes("top")
+    bar = make_indentor("grating:0.5:0.5,1.0", orientation="parallel", position_mm=(-0.3, 0.0))
+    offsets = [[0.0, 0, 0], [0.2, 0, 0], [0.4, 0, 0]]
+    for off, res in zip(offsets, cm.sweep(bar, offsets, depth_mm=0.5)):
+        u = cm.compliance(bar.approach).displacement(res.force_N)
+        w = -u[sn.dofs[:, 1]]                                              # along the approach -y
+        scale = np.abs(w).max()
+        assert np.abs(w - res.deflection_mm).max() < 1e-9 * scale
+        gap = bar.shifted(off).gap(sn.x, res.travel_mm[0]) + w
+        finite = np.isfinite(gap)
+        assert gap[finite].min() > -1e-8 and np.abs(gap[res.active]).max() < 1e-8
+        strain = S @ u
+        assert np.abs(strain - res.observed).max() < 1e-9 * np.abs(strain).max()
+        assert res.active.sum() > 5 and res.kkt["ok"]
