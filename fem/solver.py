@@ -365,7 +365,8 @@ class Model:
         key = self.mesh.t * (self.layer.max() + 1) + self.layer       # (vertex, layer) pairs
         uniq, t_split = np.unique(key, return_inverse=True)
         vertex = uniq // (self.layer.max() + 1)
-        split = type(self.mesh)(self.mesh.p[:, vertex], t_split.reshape(self.mesh.t.shape).astype(np.int32))
+        split = type(self.mesh)(np.ascontiguousarray(self.mesh.p[:, vertex]),
+                                np.ascontiguousarray(t_split.reshape(self.mesh.t.shape), dtype=np.int32))
         return Basis(split, ElementTetP1() if self.dim == 3 else ElementTriP1(), intorder=2)
 
     @cached_property
