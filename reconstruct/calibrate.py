@@ -146,7 +146,11 @@ def estimate_axis(views: list[Borders], angles_deg: np.ndarray, frame: Frame,
     for _ in range(iterations):
         s_all = np.arange(0.0, frame.height_px * frame.scale.sy_mm, step)
         left, right = sample_borders(views, frame, s_all)
-        good = np.isfinite(left).all(axis=0) & np.isfinite(right).all(axis=0)
+        # usable: every view has both borders, and they run steeply along the axis (|du/ds| < 0.5)
+        # here and at both neighbours, away from the rod-to-finger step and the rounded tip
+        slope = np.fmax(np.abs(np.gradient(left, step, axis=1)), np.abs(np.gradient(right, step, axis=1)))
+        steep = np.nan_to_num(slope, nan=np.inf).max(axis=0) < 0.5
+        good = steep & np.roll(steep, 1) & np.roll(steep, -1)
         if good.sum() < 10:
             raise InputError("the finger is not seen whole in enough rows of every view to find the "
                              "rotation axis: keep it inside the frame in all views")

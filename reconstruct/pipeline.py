@@ -125,6 +125,10 @@ def reconstruct(table: Turntable, spacing_mm=(0.5, 2.0), tol_mm: float = 0.02,
     t0 = time.perf_counter()
     calib = extract_borders(table.read(table.calibration_path), name=table.calibration_path.name)
     views = extract_all(table, progress)
+    for path, b in zip(table.image_paths, views):
+        if not np.isfinite(b.left_px).any():
+            raise InputError(f"the finger touches the image frame on every row of {path.name}: "
+                             f"zoom out or re-centre it")
     timings["silhouettes"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()

@@ -141,6 +141,10 @@ def choose_levels(s_mm: np.ndarray, h_fine: np.ndarray, spacing_mm=(0.5, 2.0),
                 break
             step = max(lo, step * 0.8)
         levels.append(min(here + step, s_mm[-1]))
-    if len(levels) > 2 and levels[-1] - levels[-2] < lo:      # share the last two gaps evenly
-        levels[-2] = 0.5 * (levels[-3] + levels[-1])
-    return np.array(levels)
+    levels = np.array(levels)
+    if len(levels) > 2 and levels[-1] - levels[-2] < lo:      # spread the short last gap evenly
+        for k in range(2, len(levels)):                       # over the last k gaps
+            if (levels[-1] - levels[-k - 1]) / k >= lo:
+                levels[-k - 1:] = np.linspace(levels[-k - 1], levels[-1], k + 1)
+                break
+    return levels

@@ -73,7 +73,7 @@ class Shape:
             return pts
         return pts[ConvexHull(pts).vertices]
 
-    def area_mm2(self, z_mm: float, n: int = 2000, convex: bool = True) -> float:
+    def area_mm2(self, z_mm: float, n: int = 720, convex: bool = True) -> float:
         """Section area (of the convex hull by default) at z."""
         p = self.convex_section(z_mm, n) if convex else self.section(z_mm, n)
         if len(p) < 3:
@@ -81,7 +81,7 @@ class Shape:
         x, y = p[:, 0], p[:, 1]
         return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
 
-    def volume_mm3(self, z_lo: float, z_hi: float, convex: bool = True, n_z: int = 801) -> float:
+    def volume_mm3(self, z_lo: float, z_hi: float, convex: bool = True, n_z: int = 201) -> float:
         """Volume between two axial positions (Simpson's rule on section areas)."""
         from scipy.integrate import simpson
 
@@ -310,7 +310,7 @@ def compare_to_truth(doc: dict, folder) -> dict:
     dists = []
     for sec in doc["sections"]:
         dists.append(point_polygon_distance(np.array(sec["points"]),
-                                            shape.convex_section(sec["z"] + shift, 1440)))
+                                            shape.convex_section(sec["z"] + shift, 720)))
     d = np.concatenate(dists)
     z = np.array([sec["z"] for sec in doc["sections"]])
     px = truth["mm_per_px"]

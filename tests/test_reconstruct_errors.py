@@ -1,0 +1,129 @@
+"""Bad input to the image stage: one-line error, exit code 2, no traceback, nothing written."""
+import shutil
+
+import cv2
+import numpy as np
+import pytest
+
+import pipeline
+from reconstruct.synthetic import make_shape, render_turntable
+
+SMALL = dict(size_px=(200, 260), mm_per_px=0.16, blur_px=0.8, noise=2.0, n_views=24)
+
+
+@pytest.fixture(scope="module")
+def good(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("good") / "set"
+    render_turntable(make_shape("fingertip"), folder, **SMALL)
+    return folder
+
+
+def _copy(good, tmp_path):
+    dst = tmp_path / "set"
+    shutil.copytree(good, dst)
+    return dst
+
+
+def _views(folder):
+    return sorted(p for p in folder.glob("view_*.png"))
+
+
+def _fails(folder, capsys, tmp_path, *words):
+    out = tmp_path / "out"
+    code = pipeline.main(["reconstruct", str(folder), "--out", str(out), "--quiet"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2
+    assert err.startswith("error: ") and "\n" not in err and "Traceback" not in err
+    for w in words:
+        assert w in err, err
+    assert not out.exists()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out")]   # no staging left
+    return err
+
+
+def test_good_set_runs(good, tmp_path):
+    assert pipeline.main(["reconstruct", str(good), "--out", str(tmp_path / "o"), "--quiet"]) == 0
+
+
+def test_missing_folder(tmp_path, capsys):
+    _fails(tmp_path / "nope", capsys, tmp_path, "does not exist")
+
+
+def test_empty_folder(tmp_path, capsys):
+    (tmp_path / "empty").mkdir()
+    _fails(tmp_path / "empty", capsys, tmp_path, "no images")
+
+
+def test_no_calibration_image(good, tmp_path, capsys):
+    f = _copy(good, tmp_path)
+    (f / "calibration.png").unlink()
+    _fails(f, capsys, tmp_path, "calibration")
+
+
+def test_unreadable_file(good, tmp_path, capsys):
+    f = _copy(good, tmp_path)
+    _views(f)[3].write_bytes(b"not a png at all")
+    _fails(f, capsys, tmp_path, "cannot read", _views(f)[3].name)
+
+
+def test_mixed_image_sizes(good, tmp_path, capsys):
+    f = _copy(good, tmp_path)
+    p = _views(f)[5]
+    cv2.imwrite(str(p), cv2.resize(cv2.imread(str(p), 0), (180, 260)))
+    _fails(f, capsys, tmp_path, "differ in size")
+
+
+def test_no_object_in_a_view(good, tmp_path, capsys):
+    f = _copy(good, tmp_path)
+    p = _views(f)[7]
+    cv2.imwrite(str(p), np.full((260, 200), 240, np.uint8))
+    _fails(f, capsys, tmp_path, "no object", p.name)
+
+
+def test_object_cut_by_the_frame_on_every_row(good, tmp_path, capsys):
+    f = _copy(good, tmp_path)
+    for p in _views(f):
+        img = cv2.imread(str(p), 0)
+        img[:, :70] = 20                       # a dark band on the left reaches every row
+        img[:, 60:75] = 20
+        cv2.imwrite(str(p), img)
+    _fails(f, capsys, tmp_path, "frame")
+
+
+def test_angles_missing(good, tmp_path, capsys):
+    f = _copy(good, tmp_path)
+    (f / "turntable.toml").unlink()
+    _views(f)[2].rename(f / "view_two.png")
+    _fails(f, capsys, tmp_path, "no view angle", "view_two.png")
+
+
+def test_angles_duplicated(good, tmp_path, capsys):
+    f = _copy(good, tmp_path)
+    (f / "turntable.toml").write_text('[angles]\n' + "".join(
+        f'"{p.name}" = {0.0 if i < 2 else 15.0 * i}\n' for i, p in enumerate(_views(f))))
+    _fails(f, capsys, tmp_path, "duplicated")
+
+
+def test_less_than_180_degrees(good, tmp_path, capsys):
+    f = _copy(good, tmp_path)
+    (f / "turntable.toml").write_text("start_deg = 0\nstep_deg = 5\n")     # 24 views: 120 deg
+    _fails(f, capsys, tmp_path, "180")
+
+
+def test_template_not_a_disc(good, tmp_path, capsys):
+    f = _copy(good, tmp_path)
+    img = np.full((260, 200), 240, np.uint8)
+    img[60:160, 50:150] = 20                  # a square
+    cv2.imwrite(str(f / "calibration.png"), img)
+    _fails(f, capsys, tmp_path, "not show a disc")
+
+
+def test_bad_manifest_and_options(good, tmp_path, capsys):
+    f = _copy(good, tmp_path)
+    (f / "turntable.toml").write_text("step_deg = 15\nzoom = 3\n")
+    _fails(f, capsys, tmp_path, "unknown key")
+    (f / "turntable.toml").write_text("step_deg = 15\n")
+    code = pipeline.main(["reconstruct", str(f), "--out", str(tmp_path / "out"), "--spacing-mm", "2", "1"])
+    assert code == 2 and "spacing" in capsys.readouterr().err
+    code = pipeline.main(["reconstruct", str(f), "--out", str(tmp_path / "out"), "--tip-fraction", "-1"])
+    assert code == 2 and not (tmp_path / "out").exists()
