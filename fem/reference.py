@@ -33,19 +33,53 @@ def lame_cylinder(r, a, b, p, E, nu):
             "sigma_zz": 2 * nu * A * np.ones_like(r), "mean": 2 * (1 + nu) / 3 * A * np.ones_like(r)}
 
 
-def lame_traction(a, b, p, E, nu):
-    """Traction sigma_exact . n of the Lame field (sphere if x is 3D, plane-strain cylinder if 2D)
-    as a callable (x, n) -> (dim, ...) for `Model.load_vector(tractions=...)`.
+def lame_sphere_layered(r, radii, E, nu, p):
+    """Thick sphere of concentric layers radii[k] <= r <= radii[k+1] with moduli E[k], Poisson
+    nu[k] (scalars broadcast), internal pressure p. In layer k: u_r = A_k r + B_k / r^2,
+    sigma_rr = 3 K A - 4 G B / r^3, sigma_tt = 3 K A + 2 G B / r^3; u_r and sigma_rr continuous.
 
-    On a faceted mesh of the shell, loading both faceted surfaces with this traction makes the Lame
+    Returns u_r, sigma_rr, sigma_tt, mean and the layer index (1-based) at radii r."""
+    r = np.asarray(r, dtype=float)
+    n = len(radii) - 1
+    E, nu = np.broadcast_to(E, n).astype(float), np.broadcast_to(nu, n).astype(float)
+    K, G = E / (3 * (1 - 2 * nu)), E / (2 * (1 + nu))
+    M, rhs = np.zeros((2 * n, 2 * n)), np.zeros(2 * n)
+    M[0, :2] = 3 * K[0], -4 * G[0] / radii[0] ** 3
+    rhs[0] = -p
+    for k in range(n - 1):
+        c = radii[k + 1]
+        M[1 + 2 * k, 2 * k:2 * k + 4] = c, 1 / c**2, -c, -1 / c**2
+        M[2 + 2 * k, 2 * k:2 * k + 4] = 3 * K[k], -4 * G[k] / c**3, -3 * K[k + 1], 4 * G[k + 1] / c**3
+    M[-1, -2:] = 3 * K[-1], -4 * G[-1] / radii[-1] ** 3
+    AB = np.linalg.solve(M, rhs).reshape(n, 2)
+    k = np.clip(np.searchsorted(radii, r, side="right") - 1, 0, n - 1)
+    A, B = AB[k, 0], AB[k, 1]
+    srr, stt = 3 * K[k] * A - 4 * G[k] * B / r**3, 3 * K[k] * A + 2 * G[k] * B / r**3
+    return {"u_r": A * r + B / r**2, "sigma_rr": srr, "sigma_tt": stt, "mean": (srr + 2 * stt) / 3,
+            "layer": k + 1}
+
+
+def radial_traction(field):
+    """Traction sigma . n of a radially symmetric field (sphere if x is 3D, cylinder if 2D) as a
+    callable (x, n) -> (dim, ...) for `Model.load_vector(tractions=...)`; `field(r)` returns a
+    dict with sigma_rr and sigma_tt (e.g. lambda r: lame_sphere(r, a, b, p, E, nu)).
+
+    On a faceted mesh of the shell, loading both faceted surfaces with this traction makes the
     field the exact solution of the discrete geometry, so the error measured is the solver's alone
     (a uniform pressure on facets adds an O(h^2) geometry error and re-entrant-edge singularities)."""
     def traction(x, n):
         r = np.sqrt((x**2).sum(axis=0))
-        ex = (lame_sphere if len(x) == 3 else lame_cylinder)(r, a, b, p, E, nu)
+        ex = field(r)
         er = x / r
         return ex["sigma_tt"] * n + (ex["sigma_rr"] - ex["sigma_tt"]) * (er * n).sum(axis=0) * er
     return traction
+
+
+def lame_traction(a, b, p, E, nu):
+    """radial_traction of the Lame sphere (3D x) or plane-strain cylinder (2D x)."""
+    sphere, cylinder = radial_traction(lambda r: lame_sphere(r, a, b, p, E, nu)), \
+        radial_traction(lambda r: lame_cylinder(r, a, b, p, E, nu))
+    return lambda x, n: (sphere if len(x) == 3 else cylinder)(x, n)
 
 
 def flamant(x, y, P):

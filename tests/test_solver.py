@@ -85,6 +85,30 @@ def test_lame_cylinder_plane_strain(nu):
     np.testing.assert_allclose(szz, 2 * nu * p * a**2 / (b**2 - a**2), rtol=0.01)
 
 
+def test_layered_sphere_stiffness_contrast():
+    """Two-layer sphere (soft 1 <= r <= 1.5 mm inside a stiff shell to 2 mm), nu = 0.4999, internal
+    pressure, exact layered Lame tractions: errors stay at the discretisation level from contrast
+    1e2 to 1e6 (measured u 1.0 %, mean stress 0.0 % / 2.0 % (soft / stiff) for both)."""
+    a, c, b, p = 1.0, 1.5, 2.0, 0.01
+    pts, cells, regions = ref.sphere_octant_shell(a, b, n_arc=16, n_rad=6)
+    layer = np.where(np.linalg.norm(pts[cells].mean(axis=1), axis=1) < c, 1, 2)
+    errors = []
+    for contrast in (1e2, 1e6):
+        moduli = [E, E * contrast]
+        model = Model(pts, cells, layer, regions, material=moduli, nu=0.4999)
+        field = lambda r: ref.lame_sphere_layered(r, [a, c, b], moduli, 0.4999, p)  # noqa: E731
+        t = ref.radial_traction(field)
+        sol = model.solve(prescribed=SYMMETRY_3D, tractions={"inner": t, "outer": t})
+        u_err, _ = _radial_errors(model, sol, field)
+        centroids = np.linalg.norm(model.mesh.p[:, model.mesh.t].mean(axis=1).T, axis=1)
+        exact = field(centroids)["mean"]
+        got = sol.element_fields["mean_stress_MPa"]
+        mean_err = [np.abs(got - exact)[layer == k].max() / np.abs(exact[layer == k]).max() for k in (1, 2)]
+        assert u_err < 0.015 and max(mean_err) < 0.03 and sol.residual < 1e-8
+        errors.append(u_err)
+    assert errors[1] < 1.1 * errors[0]
+
+
 def test_pressure_load_on_faceted_cylinder_converges():
     """A plain uniform pressure on the faceted inner surface: geometry error only, shrinking with h."""
     a, b, p, nu = 1.0, 2.0, 0.01, 0.4999
