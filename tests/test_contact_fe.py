@@ -74,3 +74,24 @@ def test_condensed_matches_full_resolve_and_receptor_strains():
         strain = S @ u
         assert np.abs(strain - res.observed).max() < 1e-9 * np.abs(strain).max()
         assert res.active.sum() > 5 and res.kkt["ok"]
+
+
+def test_receptor_grid_measures_match_solver_sampling():
+    """Receptor measures from the cached operator equal the solver's own sampling of the full field."""
+    from fem.receptors import ReceptorSampler, receptor_grid
+
+    model, system = half_plane(0.48, fine_mm=0.05, size_mm=20.0)
+    sn = model.surface_nodes("top")
+    grid = receptor_grid(sn.x, sn.normal, depths_mm=(0.5, 1.0), spacing_mm=0.5)
+    fine = grid.sites_mm[:, 0] < 1.3                      # uniform 0.05 mm nodes there
+    np.testing.assert_allclose(np.sort(grid.sites_mm[fine, 0]), [0.25, 0.75, 1.25])
+    np.testing.assert_allclose(grid.points_mm[:, 1], -grid.depth_mm, atol=1e-12)
+    sampler = ReceptorSampler(model, grid)
+    cm = ContactModel.from_fe(model, system, "top", observe=sampler.operator)
+    res = cm.indent(make_indentor("C2", orientation="parallel"), depth_mm=0.4)
+    sol = model.solution(cm.compliance(np.array([0.0, -1, 0])).displacement(res.force_N))
+    got = sampler.measures(res.observed, ["sed_MPa", "max_compressive_strain", "stress_xy_MPa"])
+    for name, values in got.items():
+        ref = sol.sample(name, grid.points_mm)
+        assert np.abs(values - ref).max() <= 1e-9 * np.abs(ref).max(), name
+    assert got["sed_MPa"].max() > 0

@@ -1,0 +1,106 @@
+"""Receptor grids: points at given depths below the undeformed skin surface, and their measures.
+
+Receptors sit 0.5-1.0 mm below the skin (Merkel cells 0.75 mm typical), about 1 mm apart
+(SPEC.md section 5). A grid is a set of surface sites (nodes of the contact region thinned to a
+spacing, or those along a line) each repeated at every depth along the inward surface normal.
+Fields are sampled in the element that holds each point (the solver's point operators), so
+nothing is averaged across a layer interface.
+
+    grid = receptor_grid(sn.x, sn.normal, depths_mm=(0.5, 0.75, 1.0), spacing_mm=1.0)
+    sampler = ReceptorSampler(model, grid)            # sampler.operator: sparse (r, ndof)
+    values = sampler.measures(sampler.operator @ u, ["sed_MPa", "max_compressive_strain"])
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from fem.measures import State, check_names, evaluate
+from reconstruct.errors import InputError
+
+DEFAULT_DEPTHS_MM = (0.5, 0.75, 1.0)
+DEFAULT_MEASURES = ("sed_MPa", "max_compressive_strain", "max_shear_strain", "strain_yy")
+
+
+@dataclass(frozen=True)
+class ReceptorGrid:
+    """points_mm (n, dim); depth_mm (n,); site (n,) index into sites_mm (k, dim) on the surface."""
+    points_mm: np.ndarray
+    depth_mm: np.ndarray
+    site: np.ndarray
+    sites_mm: np.ndarray
+
+
+def receptor_grid(surface_x, surface_normal, depths_mm=DEFAULT_DEPTHS_MM, spacing_mm: float = 1.0,
+                  line: tuple[int, float] | None = None) -> ReceptorGrid:
+    """Receptor points below surface nodes (m, dim) with outward unit normals (m, dim).
+
+    Sites are the surface nodes thinned to one per spacing_mm cube (the one nearest its centre).
+    line=(axis, value): only nodes within spacing_mm / 2 of the plane x[axis] = value, moved onto
+    it (a profile across the pad, e.g. (2, 0.0) for the section z = 0 of a 3D finger); with a
+    line the spacing is kept along the line only.
+    """
+    x, n = np.asarray(surface_x, float), np.asarray(surface_normal, float)
+    depths = np.atleast_1d(np.asarray(depths_mm, float))
+    if np.any(depths <= 0) or not spacing_mm > 0:
+        raise InputError("receptor depths and spacing must be positive (mm)")
+    if line is not None:
+        axis, value = int(line[0]), float(line[1])
+        keep = np.abs(x[:, axis] - value) <= 0.5 * spacing_mm
+        if not keep.any():
+            raise InputError(f"no surface nodes near the line x[{axis}] = {value} mm: pick a value "
+                             f"inside the model")
+        x, n = x[keep].copy(), n[keep]
+        x[:, axis] = value
+    cell = np.floor(x / spacing_mm).astype(np.int64)
+    if line is not None:
+        cell[:, line[0]] = 0
+    centre = (cell + 0.5) * spacing_mm
+    dist = np.linalg.norm(x - centre, axis=1)
+    order = np.lexsort((dist, *cell.T[::-1]))
+    _, first = np.unique(cell[order], axis=0, return_index=True)
+    pick = order[first]
+    sites, normals = x[pick], n[pick]
+    k = len(sites)
+    pts = (sites[None] - depths[:, None, None] * normals[None]).reshape(-1, x.shape[1])
+    return ReceptorGrid(pts, np.repeat(depths, k), np.tile(np.arange(k), len(depths)), sites)
+
+
+class ReceptorSampler:
+    """Point operators of a `fem.solver.Model` at the receptor points, stacked in one sparse
+    (r, ndof) matrix `operator` (displacement, strain, stress), and measures from its output."""
+
+    def __init__(self, model, grid: ReceptorGrid):
+        pts = grid.points_mm
+        self.dim, self.n = model.dim, len(pts)
+        blocks = [model.displacement_operator(pts), model.strain_operator(pts), model.stress_operator(pts)]
+        self.sizes = [b.shape[0] for b in blocks]
+        self.operator = sp.vstack(blocks).tocsr()
+        self.grid = grid
+
+    def state(self, values) -> State:
+        """Measures state from `operator @ u` (r,)."""
+        u, e, s = np.split(np.asarray(values, float), np.cumsum(self.sizes)[:-1])
+        n, d = self.n, self.dim
+        disp = np.zeros((n, 3))
+        disp[:, :d] = u.reshape(n, d)
+        if d == 3:
+            strain = _sym(e.reshape(n, 6), (0, 1, 2, 1, 0, 0), (0, 1, 2, 2, 2, 1))
+            stress = _sym(s.reshape(n, 6), (0, 1, 2, 1, 0, 0), (0, 1, 2, 2, 2, 1))
+        else:
+            strain = _sym(e.reshape(n, 3), (0, 1, 0), (0, 1, 1))
+            stress = _sym(s.reshape(n, 4), (0, 1, 2, 0), (0, 1, 2, 1))
+        return State(disp, strain, stress)
+
+    def measures(self, values, names=DEFAULT_MEASURES) -> dict[str, np.ndarray]:
+        """{name: (n,) values at the receptor points}."""
+        return evaluate(check_names(names), self.state(values))
+
+
+def _sym(comp, rows, cols):
+    t = np.zeros((len(comp), 3, 3))
+    for k, (i, j) in enumerate(zip(rows, cols)):
+        t[:, i, j] = t[:, j, i] = comp[:, k]
+    return t
