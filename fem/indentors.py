@@ -254,11 +254,12 @@ def _as_3d(points) -> np.ndarray:
 def approach_direction(incline_deg: float = 0.0) -> np.ndarray:
     """(3,) approach along -y, tilted by incline_deg about x (the finger on an inclined support).
 
-    Positive incline: the fingertip is raised, so the approach gains a proximal (-z) component:
-    a = (0, -cos i, -sin i). The thesis force-displacement experiments used 30 deg.
+    As `vertical_up` of fem.model (support plane at incline_deg to the horizontal, distal end
+    lower): the approach is minus vertical-up, a = (0, -cos i, +sin i). The thesis
+    force-displacement experiments used 30 deg.
     """
     i = math.radians(incline_deg)
-    return np.array([0.0, -math.cos(i), -math.sin(i)])
+    return np.array([0.0, -math.cos(i), math.sin(i)])
 
 
 def _orientation_deg(orientation) -> float:

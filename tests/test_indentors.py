@@ -97,7 +97,7 @@ def test_cylinder_orientation_and_incline():
     tilted = ind.make_indentor("C5", orientation=45.0)
     assert math.isclose(abs(tilted.e1 @ [0, 0, 1]), math.cos(math.radians(45)), abs_tol=1e-12)
     inc = ind.make_indentor("C5", orientation="perpendicular", incline_deg=30.0)
-    np.testing.assert_allclose(inc.approach, [0, -math.cos(math.pi / 6), -0.5], atol=1e-12)
+    np.testing.assert_allclose(inc.approach, [0, -math.cos(math.pi / 6), 0.5], atol=1e-12)
     assert abs(inc.e1 @ inc.approach) < 1e-12 and abs(inc.e2 @ inc.approach) < 1e-12
     np.testing.assert_allclose(np.abs(inc.e1), [1, 0, 0], atol=1e-12)
 
