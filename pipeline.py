@@ -93,8 +93,130 @@ def _run_render(args):
               f"ground truth in {args.out}/truth.json")
 
 
+# --------------------------------------------------------------------------- mesh
+def _add_mesh(sub):
+    p = sub.add_parser("mesh", help="layered model + tetrahedral mesh (or a 2D plane-strain mesh) -> "
+                                    "mesh.vtu, model.json")
+    p.add_argument("source", nargs="?", help="folder with sections.json (or the file itself)")
+    p.add_argument("--preset", help="3D: human, monkey (parametric fingertip, no images); 2D (thesis ch. 4): "
+                                    "block (40 x 18), square (8 x 8), cylinder8, cylinder16")
+    p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("--section-z", type=float, metavar="Z",
+                   help="2D: mesh the five-layer cross-section of the 3D model at this z (mm) instead")
+    p.add_argument("--bone", action="store_true", help="2D cylinders: add the central 2 mm bone (layer 5)")
+    p.add_argument("--size", type=float, help="target edge length on the volar skin / top surface in mm "
+                                               "(default 0.5 in 3D, 0.125 in 2D)")
+    p.add_argument("--coarse", type=float, help="largest edge length in mm (default 3.0 in 3D, 1.0 in 2D)")
+    p.add_argument("--growth", type=float, help="edge length growth per mm away from the fine zone (default 0.5)")
+    p.add_argument("--fine-depth", type=float, help="depth of the fine zone below the volar surface in mm "
+                                                     "(default 1.5 in 3D, 1.0 in 2D)")
+    p.add_argument("--epidermis", type=float, help="epidermis thickness in mm (default 0.5)")
+    p.add_argument("--dermis", type=float, help="dermis thickness in mm (default 1.0)")
+    p.add_argument("--layer3", type=float, help="layer 3 volar thickness at the reference sections in mm; "
+                                                 "sets the thesis scale factor (default human 1.5, monkey 0.55)")
+    p.add_argument("--bone-diameter", type=float, help="bone width at the middle reference section in mm "
+                                                        "(default 2.0)")
+    p.add_argument("--bone-profile", help="bone width / section width along the length, 's:ratio,...' with "
+                                          "s in [0, 1] from proximal to distal, e.g. 0:0.25,1:0.18")
+    p.add_argument("--bone-offset", type=float, help="bone shift towards the nail (-y) in mm "
+                                                      "(default human 1.0, monkey 0.15)")
+    p.add_argument("--nail-span", type=float, help="nail region angular span in deg (default 120)")
+    p.add_argument("--nail-z", type=float, nargs=2, metavar=("LO", "HI"),
+                   help="nail region as fractions of the length (default 0.3 1.0)")
+    p.add_argument("--support-span", type=float, help="support region angular span in deg (default 90)")
+    p.add_argument("--support-z", type=float, nargs=2, metavar=("LO", "HI"),
+                   help="support region as fractions of the length (default 0 0.3)")
+    p.add_argument("--support-incline", type=float, help="support plane angle to the horizontal in deg "
+                                                          "(30 for the thesis platform; default 0)")
+    p.add_argument("--z-range", type=float, nargs=2, metavar=("Z0", "Z1"),
+                   help="use only the sections in this z range (mm)")
+    p.add_argument("--force", action="store_true", help="rebuild the mesh, ignoring the cache")
+    p.add_argument("--quiet", action="store_true", help="no progress and no summary")
+    p.set_defaults(run=_run_mesh)
+
+
+def _run_mesh(args):
+    from fem.mesh_cli import run_mesh_command
+
+    text = run_mesh_command(args)
+    if not args.quiet:
+        print(text)
+
+
+# --------------------------------------------------------------------------- indent
+def _add_indent(sub):
+    p = sub.add_parser("indent", help="rigid indentors on a meshed model: depth or force control, sweeps "
+                                      "-> CSV, PNG, PVD")
+    p.add_argument("model", help="model folder with mesh.vtu (+ model.json) from `pipeline.py mesh`")
+    p.add_argument("--scene", help="TOML scene file (scenes/*.toml); the flags below describe one experiment")
+    p.add_argument("--indentor", help="indentor code: C1-C8, R1-R2, cylinder:<d>, step:0-5, bar:<w>, "
+                                      "grating:<bar>[:<gaps>], wedge, cone, punch, plate, sphere:<r>, "
+                                      "ellipsoid:<a,b,c>, two-point:<separation>")
+    p.add_argument("--axis", "--orientation", dest="orientation", default="parallel",
+                   help="indentor length axis: parallel or perpendicular to the finger axis, or an "
+                        "angle in degrees (default parallel; 2D models need parallel)")
+    p.add_argument("--position", type=float, nargs=2, default=(0.0, 0.0), metavar=("X", "Z"),
+                   help="indentor position on the pad in mm (default 0 0)")
+    p.add_argument("--incline", type=float, help="finger incline in degrees (default: the model's support)")
+    load = p.add_mutually_exclusive_group()
+    load.add_argument("--depth", help="depths in mm beyond first touch: start:stop:step or list (e.g. 0:3:0.5)")
+    load.add_argument("--force", type=float, help="total force in N (N/mm in 2D); the depth is solved for")
+    p.add_argument("--equal-force", action="store_true", help="with --force: every part of a two-point "
+                                                              "indentor carries the force")
+    p.add_argument("--max-depth", type=float, default=5.0, help="depth limit for --force in mm (default 5)")
+    p.add_argument("--sweep", help="move the indentor: x=start:stop:step or z=start:stop:step (mm)")
+    p.add_argument("--material", help="material code or moduli (default: the model's)")
+    p.add_argument("--nu", type=float, help="Poisson ratio (default: the model's)")
+    p.add_argument("--receptor-depths", default="0.5,0.75,1.0", help="receptor depths in mm (default 0.5,0.75,1.0)")
+    p.add_argument("--receptor-spacing", type=float, default=1.0, help="receptor spacing in mm (default 1)")
+    p.add_argument("--line", help="receptors only along a line: z=<mm> or x=<mm> (default: the whole pad)")
+    p.add_argument("--pvd", action=argparse.BooleanOptionalAction, default=None,
+                   help="full fields per indentation as a PVD series (default: on up to 20 indentations)")
+    p.add_argument("--out", help="output folder (default: <model>/indent_<indentor>)")
+    p.add_argument("--quiet", action="store_true", help="no progress and no summary")
+    p.set_defaults(run=_run_indent)
+
+
+def _run_indent(args):
+    from pathlib import Path
+
+    from fem.contact import load_scene, run_scene
+
+    if args.scene:
+        scene = load_scene(args.scene)
+        name = Path(args.scene).stem
+    else:
+        if not args.indentor or (args.depth is None and args.force is None):
+            raise InputError("indent needs --scene, or --indentor with --depth or --force")
+        exp = {"name": args.indentor.replace(":", "_").replace(",", "_"), "indentor": args.indentor,
+               "orientation": args.orientation, "position_mm": list(args.position)}
+        if args.depth is not None:
+            exp["depth_mm"] = args.depth
+        else:
+            exp.update(force_N=args.force, equal_force=args.equal_force, max_depth_mm=args.max_depth)
+        if args.sweep:
+            exp["sweep"] = args.sweep
+        if args.incline is not None:
+            exp["incline_deg"] = args.incline
+        scene = {"experiment": [exp], "receptors": {"depths_mm": args.receptor_depths,
+                                                    "spacing_mm": args.receptor_spacing}}
+        if args.line:
+            axis, _, value = args.line.partition("=")
+            scene["receptors"]["line"] = [axis, float(value)]
+        name = exp["name"]
+    for key in ("material", "nu"):
+        if getattr(args, key) is not None:
+            scene[key] = getattr(args, key)
+    if args.pvd is not None:
+        scene.setdefault("output", {})["pvd"] = args.pvd
+    out = args.out or str(Path(args.model) / f"indent_{name}")
+    summary = run_scene(args.model, out, scene, progress=not args.quiet)
+    if not args.quiet:
+        print(summary)
+
+
 # --------------------------------------------------------------------------- main
-COMMANDS = [_add_reconstruct, _add_render]
+COMMANDS = [_add_reconstruct, _add_render, _add_mesh, _add_indent]
 
 
 def build_parser() -> argparse.ArgumentParser:

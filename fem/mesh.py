@@ -43,7 +43,7 @@ class Sizing:
     fine_depth_mm: float = 1.5
     fine_z_frac: tuple = (0.0, 1.0)
     epsilon_mm: float = 0.02
-    opt_iter: int = 40
+    opt_iter: int = 20
 
     def check(self) -> None:
         for name in ("size_mm", "coarse_mm", "growth", "fine_depth_mm", "epsilon_mm"):
@@ -123,7 +123,7 @@ def tetrahedralize(model: LayeredModel, sizing: Sizing, threads: int = 0):
     bg_p, bg_t, bg_v = background_mesh(model, sizing)
     pts, tets = pytetwild.tetrahedralize(
         v, f, edge_length_abs=sizing.coarse_mm, epsilon=sizing.epsilon_mm / diag, vtk_ordering=True,
-        quiet=True, disable_filtering=True, num_opt_iter=sizing.opt_iter, num_threads=threads,
+        quiet=True, simplify=False, disable_filtering=True, num_opt_iter=sizing.opt_iter, num_threads=threads,
         bg_vertices=bg_p, bg_tets=bg_t, bg_values=bg_v)
     keep = label_tets(model, pts, tets) > 0
     tets = tets[keep]
