@@ -436,3 +436,261 @@ class ContactModel:
         ones = np.stack([(pa == k).astype(float) for k in range(n)], axis=1)
         sol = sla.cho_solve(lcp.factor, ones)
         return ones.T @ sol
+
+
+# --------------------------------------------------------------------------- experiments on a model folder
+EXPERIMENT_KEYS = {"name", "indentor", "orientation", "position_mm", "incline_deg", "approach",
+                   "depth_mm", "force_N", "equal_force", "max_depth_mm", "sweep"}
+SCENE_KEYS = {"model", "material", "nu", "receptors", "output", "experiment"}
+RECEPTOR_KEYS = {"depths_mm", "spacing_mm", "line", "measures"}
+OUTPUT_KEYS = {"pvd", "plots"}
+
+
+def parse_values(text) -> np.ndarray:
+    """'a:b:step' (inclusive), 'v1,v2,...', a number or a list -> (n,) floats."""
+    if isinstance(text, (int, float)):
+        return np.array([float(text)])
+    if isinstance(text, (list, tuple)):
+        return np.asarray(text, float)
+    try:
+        if ":" in text:
+            a, b, step = (float(t) for t in text.split(":"))
+            if not step > 0 or b < a:
+                raise ValueError
+            return a + step * np.arange(int(np.floor((b - a) / step + 1e-9)) + 1)
+        return np.array([float(t) for t in text.split(",")])
+    except ValueError:
+        raise InputError(f"bad value list '{text}': use start:stop:step (e.g. 0.5:3:0.5) or v1,v2,...") from None
+
+
+def parse_sweep(text) -> tuple[int, np.ndarray]:
+    """'x=-3:3:0.1' or 'z=...' -> (axis index, (k,) offsets in mm)."""
+    axis, eq, values = str(text).partition("=")
+    if not eq or axis.strip() not in ("x", "z"):
+        raise InputError(f"bad sweep '{text}': use x=start:stop:step or z=start:stop:step (mm)")
+    return {"x": 0, "z": 2}[axis.strip()], parse_values(values)
+
+
+def load_scene(path) -> dict:
+    """Read a TOML scene file; unknown keys are errors (a typo must not be silently ignored)."""
+    import tomllib
+
+    try:
+        with open(path, "rb") as fh:
+            scene = tomllib.load(fh)
+    except (OSError, tomllib.TOMLDecodeError) as exc:
+        raise InputError(f"cannot read scene '{path}': {exc}") from None
+    _check_keys(scene, SCENE_KEYS, "scene")
+    _check_keys(scene.get("receptors", {}), RECEPTOR_KEYS, "[receptors]")
+    _check_keys(scene.get("output", {}), OUTPUT_KEYS, "[output]")
+    if not scene.get("experiment"):
+        raise InputError(f"scene '{path}' has no [[experiment]] table")
+    for exp in scene["experiment"]:
+        _check_keys(exp, EXPERIMENT_KEYS, "[[experiment]]")
+    return scene
+
+
+def _check_keys(table, allowed, where):
+    unknown = set(table) - allowed
+    if unknown:
+        raise InputError(f"unknown key(s) {sorted(unknown)} in {where}; allowed: {sorted(allowed)}")
+
+
+def open_model(model_dir, material=None, nu=None):
+    """(fem.solver.Model, LinearSystem, contact region name, model.json dict) of a model folder:
+    3D nail fixed and support normal held, contact on `volar`; 2D `fixed` held, contact on `surface`."""
+    import json
+    from pathlib import Path
+
+    from fem.solver import Model
+
+    folder = Path(model_dir)
+    if not (folder / "mesh.vtu").is_file():
+        raise InputError(f"no mesh.vtu in '{model_dir}': run `pipeline.py mesh` first or give a model folder")
+    info = json.loads((folder / "model.json").read_text()) if (folder / "model.json").is_file() else {}
+    model = Model.from_mesh(folder / "mesh.vtu", material=material or info.get("material", "m33338"),
+                            nu=info.get("nu", 0.48) if nu is None else nu)
+    if model.dim == 3:
+        prescribed, region = {"nail": 0.0, "support": (None, 0.0, None)}, "volar"
+    else:
+        prescribed, region = {"fixed": 0.0}, "surface"
+    prescribed = {k: v for k, v in prescribed.items() if k in model.regions}
+    return model, model.system(prescribed), region, info
+
+
+def run_scene(model_dir, out_dir, scene: dict, progress: bool = True) -> str:
+    """Run every [[experiment]] of a scene on a model folder; write CSV, PNG (and PVD) atomically
+    into out_dir. Returns a text summary."""
+    import time
+
+    from fem.indentors import make_indentor
+    from fem.receptors import DEFAULT_DEPTHS_MM, DEFAULT_MEASURES, ReceptorSampler, receptor_grid
+    from reconstruct.io import staged_output
+
+    t_start = time.perf_counter()
+    model, system, region, info = open_model(model_dir, scene.get("material"), scene.get("nu"))
+    sn = model.surface_nodes(region)
+    rc = scene.get("receptors", {})
+    line = rc.get("line")
+    if line is not None:
+        line = ({"x": 0, "y": 1, "z": 2}[line[0]], float(line[1]))
+    grid = receptor_grid(sn.x, sn.normal, parse_values(rc.get("depths_mm", list(DEFAULT_DEPTHS_MM))),
+                         float(rc.get("spacing_mm", 1.0)), line)
+    sampler = ReceptorSampler(model, grid)
+    measures = list(rc.get("measures", DEFAULT_MEASURES))
+    cm = ContactModel.from_fe(model, system, region, observe=sampler.operator)
+    up = info.get("regions", {}).get("support", {}).get("vertical_up")
+    runs = []
+    for k, exp in enumerate(scene["experiment"]):
+        name = str(exp.get("name", f"experiment{k + 1}"))
+        place = {"orientation": exp.get("orientation", "parallel"),
+                 "position_mm": tuple(exp.get("position_mm", (0.0, 0.0)))}
+        if "approach" in exp:
+            place["approach"] = exp["approach"]
+        elif "incline_deg" in exp:
+            place["incline_deg"] = float(exp["incline_deg"])
+        elif up is not None and model.dim == 3:
+            place["approach"] = -np.asarray(up, float)
+        ind = make_indentor(str(exp["indentor"]), **place)
+        offsets = np.zeros((1, 3))
+        if "sweep" in exp:
+            axis, vals = parse_sweep(exp["sweep"])
+            offsets = np.zeros((len(vals), 3))
+            offsets[:, axis] = vals
+        if ("depth_mm" in exp) == ("force_N" in exp):
+            raise InputError(f"experiment '{name}': give depth_mm or force_N (one of them)")
+        if "depth_mm" in exp:
+            loads = [{"depth_mm": float(d)} for d in parse_values(exp["depth_mm"])]
+        else:
+            loads = [{"force_N": float(exp["force_N"]), "equal_force": bool(exp.get("equal_force", False)),
+                      "max_depth_mm": float(exp.get("max_depth_mm", MAX_DEPTH_MM))}]
+        t0 = time.perf_counter()
+        steps = []
+        for off in offsets:
+            for load in loads:
+                steps.append((off, cm.sweep(ind, off[None], **load)[0]))
+        runs.append((name, ind, steps, time.perf_counter() - t0))
+        if progress:
+            print(f"{name}: {len(steps)} indentations in {runs[-1][3]:.2f} s", flush=True)
+    out = scene.get("output", {})
+    with staged_output(out_dir) as tmp:
+        for name, ind, steps, _ in runs:
+            _write_run(tmp, name, ind, steps, cm, sn, sampler, measures, model,
+                       pvd=bool(out.get("pvd", len(steps) <= 20)), plots=bool(out.get("plots", True)))
+    total = time.perf_counter() - t_start
+    lines = [f"indentation results in {out_dir} ({total:.1f} s; model {model.ndof} DOFs, "
+             f"{len(sn.nodes)} contact candidates, {len(grid.points_mm)} receptor points)"]
+    for name, ind, steps, secs in runs:
+        worst = max(r.kkt["penetration_mm"] for _, r in steps)
+        lines.append(f"  {name}: {len(steps)} indentations, {secs:.2f} s, force "
+                     f"{min(r.total_force_N for _, r in steps):.4g}-{max(r.total_force_N for _, r in steps):.4g} N, "
+                     f"max penetration {worst:.1e} mm")
+    return "\n".join(lines)
+
+
+def _width_mm(res, ind, x, dim):
+    if dim == 2:
+        return res.contact_area_mm2
+    v = (x[res.active] @ ind.e2) if res.active.any() else np.zeros(1)
+    return float(v.max() - v.min())
+
+
+def _write_run(folder, name, ind, steps, cm, sn, sampler, measures, model, pvd, plots):
+    import csv
+
+    x3 = np.zeros((len(sn.x), 3))
+    x3[:, :model.dim] = sn.x
+    rows, surf, rec = [], [], []
+    for i, (off, r) in enumerate(steps):
+        vals = sampler.measures(r.observed, measures)
+        rows.append({"step": i, "offset_x_mm": off[0], "offset_z_mm": off[2],
+                     "depth_mm": float(r.depth_mm.max()), "force_N": r.total_force_N,
+                     **{f"force_part{k}_N": f for k, f in enumerate(r.part_force_N) if len(r.depth_mm) > 1},
+                     "contact_area_mm2": r.contact_area_mm2, "contact_width_mm": _width_mm(r, ind, x3, model.dim),
+                     "max_pressure_MPa": r.max_pressure_MPa, "penetration_mm": r.kkt["penetration_mm"],
+                     "tensile_N": r.kkt["tensile_N"], "complementarity_Nmm": r.kkt["complementarity_Nmm"],
+                     "kkt_ok": r.kkt["ok"]})
+        for j in range(len(sn.x)):
+            surf.append([i, *x3[j], r.deflection_mm[j], r.pressure_MPa[j], r.force_N[j]])
+        pts = np.zeros((len(sampler.grid.points_mm), 3))
+        pts[:, :model.dim] = sampler.grid.points_mm
+        for j in range(len(pts)):
+            rec.append([i, *pts[j], sampler.grid.depth_mm[j], *(vals[m][j] for m in measures)])
+    _csv(folder / f"{name}.csv", list(rows[0]), [list(r.values()) for r in rows], csv)
+    _csv(folder / f"{name}_surface.csv", ["step", "x_mm", "y_mm", "z_mm", "deflection_mm", "pressure_MPa",
+                                          "force_N"], surf, csv)
+    _csv(folder / f"{name}_receptors.csv", ["step", "x_mm", "y_mm", "z_mm", "depth_mm", *measures], rec, csv)
+    if pvd:
+        from fem.export import write_vtu
+
+        comp = cm.compliance(ind.approach)
+        names = []
+        for i, (_, r) in enumerate(steps):
+            names.append(f"{name}_{i:03d}.vtu")
+            write_vtu(folder / names[-1], model.solution(comp.displacement(r.force_N)))
+        entries = "\n".join(f'    <DataSet timestep="{i}" file="{n}"/>' for i, n in enumerate(names))
+        (folder / f"{name}.pvd").write_text('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
+                                            f"  <Collection>\n{entries}\n  </Collection>\n</VTKFile>\n")
+    if plots:
+        _plots(folder, name, ind, steps, sn, x3, sampler, measures, rows)
+
+
+def _csv(path, header, rows, csv):
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(header)
+        w.writerows([[f"{v:.9g}" if isinstance(v, float) else v for v in row] for row in rows])
+
+
+def _plots(folder, name, ind, steps, sn, x3, sampler, measures, rows):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    sweep = len({tuple(o) for o, _ in steps}) > 1
+    key = "offset_x_mm" if sweep and any(r["offset_x_mm"] for r in rows) else ("offset_z_mm" if sweep else "depth_mm")
+    fig, ax = plt.subplots(1, 2, figsize=(10, 4))
+    ax[0].plot([r[key] for r in rows], [r["force_N"] for r in rows], "o-")
+    ax[0].set(xlabel=key, ylabel="force_N", title=f"{name}: force")
+    ax[1].plot([r[key] for r in rows], [r["max_pressure_MPa"] for r in rows], "o-")
+    ax[1].set(xlabel=key, ylabel="max_pressure_MPa", title="max contact pressure")
+    fig.tight_layout()
+    fig.savefig(folder / f"{name}_force.png", dpi=110)
+    plt.close(fig)
+    # deflection and pressure across the indentor (nodes near its centre line), last step(s)
+    u = (x3 - ind.origin_mm) @ ind.e1
+    v = (x3 - ind.origin_mm) @ ind.e2
+    near = np.abs(u) <= max(0.5, np.sort(np.abs(u))[min(len(u) - 1, 50)])
+    order = np.argsort(v[near])
+    fig, ax = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+    for i, (off, r) in enumerate(steps[-8:] if not sweep else steps[-1:]):
+        ax[0].plot(v[near][order], -r.deflection_mm[near][order], label=f"{r.depth_mm.max():.2f} mm")
+        ax[1].plot(v[near][order], r.pressure_MPa[near][order])
+    ax[0].set(ylabel="surface displacement along approach, mm (down -)", title=f"{name}: surface profile")
+    ax[0].legend(fontsize=7)
+    ax[1].set(xlabel="position across the indentor, mm", ylabel="pressure_MPa")
+    fig.tight_layout()
+    fig.savefig(folder / f"{name}_profile.png", dpi=110)
+    plt.close(fig)
+    # receptor measures: profile across the pad (last step) or against the sweep position
+    g = sampler.grid
+    fig, axes = plt.subplots(len(measures), 1, figsize=(8, 2.2 * len(measures)), sharex=True, squeeze=False)
+    site_v = (np.pad(g.sites_mm, ((0, 0), (0, 3 - g.sites_mm.shape[1]))) - ind.origin_mm) @ ind.e2
+    for m, a in zip(measures, axes[:, 0]):
+        for d in np.unique(g.depth_mm):
+            sel = g.depth_mm == d
+            if sweep:
+                j = np.flatnonzero(sel)[np.argmin(np.abs(site_v[g.site[sel]]))]
+                vals = [sampler.measures(r.observed, [m])[m][j] for _, r in steps]
+                a.plot([r[key] for r in rows], vals, label=f"{d:g} mm")
+            else:
+                vals = sampler.measures(steps[-1][1].observed, [m])[m][sel]
+                o = np.argsort(site_v[g.site[sel]])
+                a.plot(site_v[g.site[sel]][o], vals[o], ".-", label=f"{d:g} mm")
+        a.set_ylabel(m, fontsize=8)
+        a.legend(fontsize=7)
+    axes[-1, 0].set_xlabel(key if sweep else "receptor site across the indentor, mm")
+    fig.tight_layout()
+    fig.savefig(folder / f"{name}_receptors.png", dpi=110)
+    plt.close(fig)
