@@ -1,0 +1,88 @@
+"""`pipeline.py indent` on a 2D cylinder model with bone: outputs, scenes, bad input, thesis trends."""
+import csv
+
+import numpy as np
+import pytest
+
+import pipeline
+from fem.contact import ContactModel, open_model
+from fem.indentors import make_indentor
+
+
+@pytest.fixture(scope="module")
+def cyl8(tmp_path_factory):
+    out = tmp_path_factory.mktemp("models") / "cyl8"
+    assert pipeline.main(["mesh", "--preset", "cylinder8", "--bone", "--out", str(out), "--quiet"]) == 0
+    return out
+
+
+def _rows(path):
+    with open(path) as fh:
+        return list(csv.DictReader(fh))
+
+
+def test_depth_series_outputs(cyl8, tmp_path):
+    out = tmp_path / "c5"
+    assert pipeline.main(["indent", str(cyl8), "--indentor", "C5", "--depth", "0.25:1:0.25",
+                          "--out", str(out), "--quiet"]) == 0
+    rows = _rows(out / "C5.csv")
+    depth = [float(r["depth_mm"]) for r in rows]
+    force = [float(r["force_N"]) for r in rows]
+    assert depth == [0.25, 0.5, 0.75, 1.0]
+    assert all(b > a for a, b in zip(force, force[1:]))                  # stiffening with depth
+    assert all(f2 / f1 > d2 / d1 for (d1, f1), (d2, f2) in zip(zip(depth, force), zip(depth[1:], force[1:])))
+    assert all(r["kkt_ok"] == "True" for r in rows)
+    assert all(float(r["penetration_mm"]) < 1e-8 for r in rows)
+    for name in ("C5_surface.csv", "C5_receptors.csv", "C5.pvd", "C5_003.vtu", "C5_force.png",
+                 "C5_profile.png", "C5_receptors.png"):
+        assert (out / name).is_file(), name
+    rec = _rows(out / "C5_receptors.csv")
+    assert {"sed_MPa", "max_compressive_strain", "depth_mm"} <= set(rec[0])
+    assert {float(r["depth_mm"]) for r in rec} == {0.5, 0.75, 1.0}
+
+
+def test_scene_with_force_control_and_sweep(cyl8, tmp_path):
+    scene = tmp_path / "s.toml"
+    scene.write_text('[receptors]\ndepths_mm = [0.75]\nspacing_mm = 0.5\n\n'
+                     '[[experiment]]\nname = "bar"\nindentor = "bar:1.5"\nforce_N = 0.002\n'
+                     'sweep = "x=-1:1:0.5"\n')
+    out = tmp_path / "s"
+    assert pipeline.main(["indent", str(cyl8), "--scene", str(scene), "--out", str(out), "--quiet"]) == 0
+    rows = _rows(out / "bar.csv")
+    assert [float(r["offset_x_mm"]) for r in rows] == [-1, -0.5, 0, 0.5, 1]
+    np.testing.assert_allclose([float(r["force_N"]) for r in rows], 0.002, rtol=1e-5)
+    d = [float(r["depth_mm"]) for r in rows]
+    assert abs(d[0] - d[-1]) < 0.02 * d[2]                                # symmetric model
+    assert (out / "bar.pvd").is_file() and (out / "bar_004.vtu").is_file()   # PVD up to 20 steps
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--indentor", "C9", "--depth", "1"], "unknown indentor"),
+    (["--indentor", "C5", "--force", "50", "--max-depth", "1"], "not reached"),
+    (["--indentor", "punch:1", "--depth", "1", "--sweep", "x=0:20:5"], "sweep position"),
+    (["--indentor", "punch:1", "--depth", "1", "--position", "9", "0"], "never touches"),
+    (["--indentor", "C5"], "--depth or --force"),
+])
+def test_bad_input_one_line_exit_2_nothing_written(cyl8, tmp_path, capsys, args, message):
+    out = tmp_path / "bad"
+    assert pipeline.main(["indent", str(cyl8), *args, "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error:") and message in err and "\n" not in err
+    assert not out.exists()
+    assert not list(tmp_path.glob(".bad*"))
+
+
+def test_thesis_trend_cylinders_at_constant_force(cyl8):
+    """Thesis 4.6: at constant force a larger cylinder gives a wider contact, a lower peak pressure
+    and needs less depth."""
+    model, system, region, _ = open_model(cyl8)
+    cm = ContactModel.from_fe(model, system, region)
+    res = [cm.indent(make_indentor(c, orientation="parallel"), force_N=0.001)
+           for c in ("C1", "C3", "C5", "C8")]
+    width = [r.contact_area_mm2 for r in res]
+    peak = [r.max_pressure_MPa for r in res]
+    depth = [float(r.depth_mm[0]) for r in res]
+    assert all(b > a for a, b in zip(width, width[1:])), width
+    assert all(b < a for a, b in zip(peak, peak[1:])), peak
+    assert all(b < a for a, b in zip(depth, depth[1:])), depth
+    assert all(r.kkt["ok"] for r in res)
