@@ -111,9 +111,7 @@ class _Factor:
             self.backend, self._solve = "scipy-splu", splu(A.tocsc()).solve
             return
         self._A = sp.triu(A, format="csr")       # PARDISO symmetric types read the upper triangle
-        self._pardiso = PyPardisoSolver(mtype=-2)
-        for i, v in ((1, 1), (2, 3), (10, 8), (11, 1), (13, 1), (21, 1)):
-            self._pardiso.set_iparm(i, v)     # parallel METIS, scaling + matching, Bunch-Kaufman
+        self._pardiso = PyPardisoSolver(mtype=-2)   # real symmetric indefinite, default iparm
         try:
             self._pardiso.factorize(self._A)
         except PyPardisoError as exc:
