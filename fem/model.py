@@ -244,13 +244,13 @@ def check_polygon(points: np.ndarray, where: str) -> np.ndarray:
     if edges[-1] > 10 * np.median(edges) and edges[-1] > 0.2 * edges.sum():
         raise InputError(f"{where}: the section is not closed (gap of {edges[-1]:.2f} mm between the "
                          "last and first point); give a closed outline")
+    if _self_intersects(p):
+        raise InputError(f"{where}: the section outline intersects itself; give a simple closed polygon")
     area = _area(p)
     if abs(area) < 1e-9:
         raise InputError(f"{where}: the section has zero area")
     if area < 0:
         p = p[::-1]
-    if _self_intersects(p):
-        raise InputError(f"{where}: the section outline intersects itself; give a simple closed polygon")
     from scipy.spatial import ConvexHull
 
     hull = ConvexHull(p)

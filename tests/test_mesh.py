@@ -1,0 +1,118 @@
+"""3D mesh of the monkey preset through `pipeline.py mesh`: the mesh.vtu / model.json contract and
+the checks of issue 3. One coarse mesh (0.8 mm) is built once per module; pytetwild is not
+deterministic, so tet counts are never asserted."""
+import json
+
+import meshio
+import numpy as np
+import pytest
+
+import pipeline
+from fem.mesh import boundary_faces, label_tets, quality, straddle_check, tet_volumes
+from fem.model import model_from_args, params_for
+
+ARGS = ["mesh", "--preset", "monkey", "--size", "0.8", "--quiet"]
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    mp = pytest.MonkeyPatch()
+    cache = tmp_path_factory.mktemp("cache")
+    mp.setenv("FINGERTIP_CACHE_DIR", str(cache))
+    out = tmp_path_factory.mktemp("monkey")
+    assert pipeline.main([*ARGS, "--out", str(out)]) == 0
+    yield out, cache
+    mp.undo()
+
+
+def load(out):
+    m = meshio.read(out / "mesh.vtu")
+    return m, json.loads((out / "model.json").read_text())
+
+
+def test_file_contract(built):
+    m, info = load(built[0])
+    assert list(m.cells_dict) == ["tetra"]
+    layer = m.cell_data["layer"][0]
+    assert layer.dtype == np.int32 and set(np.unique(layer)) == {1, 2, 3, 4, 5}
+    for name in ("nail", "support", "volar"):
+        assert m.point_data[name].dtype == np.uint8
+    assert np.all(tet_volumes(m.points, m.cells_dict["tetra"]) > 0)          # positive orientation
+    assert info["material"] == "m43338" and info["nu"] == 0.48
+    p = info["params"]
+    assert p["epidermis_mm"] == 0.5 and p["dermis_mm"] == 1.0 and p["bone_offset_mm"] == 0.15
+    assert info["regions"]["support"]["normal"] == [0.0, 1.0, 0.0]
+    assert info["sizing"]["size_mm"] == 0.8 and len(info["sections_sha256"]) == 64
+
+
+def test_layer_volumes_within_2_percent_of_the_model_shells(built):
+    m, info = load(built[0])
+    model = model_from_args(None, "monkey", params_for("monkey"))
+    vol = tet_volumes(m.points, m.cells_dict["tetra"])
+    per_layer = np.bincount(m.cell_data["layer"][0], vol, minlength=6)[1:]
+    # pytetwild keeps interfaces within epsilon_mm = 0.02 of the model; the 2 mm bone loses most
+    assert per_layer == pytest.approx(model.layer_volumes_mm3(), rel=0.02)
+    assert info["mesh"]["layer_volumes_mm3"] == pytest.approx(per_layer.tolist(), rel=1e-9)
+
+
+def test_no_tet_straddles_an_interface(built):
+    m, info = load(built[0])
+    model = model_from_args(None, "monkey", params_for("monkey"))
+    tets, layer = m.cells_dict["tetra"], m.cell_data["layer"][0]
+    assert np.array_equal(label_tets(model, m.points, tets), layer)
+    s = straddle_check(model, m.points, tets, layer, tol_mm=0.041)
+    assert s["straddling_tets"] == 0 and s["max_crossing_mm"] < 0.041
+    # the check does find a straddling tet: relabel bone tets as layer 3
+    wrong = layer.copy()
+    wrong[layer == 5] = 3
+    assert straddle_check(model, m.points, tets, wrong, tol_mm=0.041)["straddling_tets"] > 0
+
+
+def test_regions_are_non_empty_and_on_the_right_side(built):
+    m, info = load(built[0])
+    model = model_from_args(None, "monkey", params_for("monkey"))
+    bf = boundary_faces(m.cells_dict["tetra"])
+    cy = np.interp(m.points[:, 2], model.z_mm, model.centroids[:, 1])
+    zf = model.z_frac(m.points[:, 2])
+    for name, side in (("nail", -1), ("support", -1), ("volar", 1)):
+        flag = m.point_data[name].astype(bool)
+        assert flag[bf].all(axis=1).sum() > 5, name                      # boundary facets in the region
+        dy = side * (m.points[flag, 1] - cy[flag])
+        assert dy.min() >= -1e-9 and np.median(dy) > 1.0, name     # volar span 180 deg reaches the sides
+    nail, support = m.point_data["nail"].astype(bool), m.point_data["support"].astype(bool)
+    assert zf[nail].min() >= 0.3 - 1e-6 and zf[support].max() <= 0.3 + 1e-6
+    assert info["mesh"]["regions"]["nail"]["facets"] == m.point_data["nail"][bf].all(axis=1).sum()
+
+
+def test_bone_offset_matches_the_parameter(built):
+    _, info = load(built[0])
+    # measured from bone tets against the section centroids; 0.15 mm +- 0.03 (mesh faceting)
+    assert info["mesh"]["bone_offset_mm"] == pytest.approx(0.15, abs=0.03)
+
+
+def test_quality_and_sizing_are_reported_and_sane(built):
+    m, info = load(built[0])
+    q = quality(m.points, m.cells_dict["tetra"])
+    assert q.pop("edge_mm") == pytest.approx(info["mesh"]["quality"].pop("edge_mm"))
+    assert q == pytest.approx(info["mesh"]["quality"])
+    assert q["min_dihedral_deg"] > 5 and q["min_scaled_jacobian"] > 0.05
+    fine = info["mesh"]["sizing_achieved"]["fine_zone_median_edge_mm"]
+    assert fine == pytest.approx(0.8, rel=0.25)
+
+
+def test_cache_returns_the_same_mesh_and_force_is_accepted(built, tmp_path):
+    out, cache = built
+    assert len(list(cache.rglob("*.npz"))) == 1
+    again = tmp_path / "again"
+    assert pipeline.main([*ARGS, "--out", str(again)]) == 0
+    m1, _ = load(out)
+    m2, info2 = load(again)
+    assert info2["mesh"]["from_cache"] is True
+    assert np.array_equal(m1.points, m2.points) and np.array_equal(m1.cells_dict["tetra"], m2.cells_dict["tetra"])
+    # a changed parameter changes the key (no stale mesh): bone offset 0.1 must not hit the cache
+    from fem.mesh import Sizing, mesh_key
+
+    base = model_from_args(None, "monkey", params_for("monkey"))
+    other = model_from_args(None, "monkey", params_for("monkey", bone_offset_mm=0.1))
+    assert mesh_key(base, Sizing(size_mm=0.8)) != mesh_key(other, Sizing(size_mm=0.8))
+    assert mesh_key(base, Sizing(size_mm=0.8)) != mesh_key(base, Sizing(size_mm=0.7))

@@ -1,0 +1,151 @@
+"""Layered model geometry (no meshing): layer thicknesses, scaling, bone, analytic volumes, errors."""
+import json
+
+import numpy as np
+import pytest
+
+import pipeline
+from fem.model import ModelParams, build_model, model_from_args, params_for
+
+
+def circle(r, n=360, c=(0.0, 0.0)):
+    t = 2 * np.pi * np.arange(n) / n
+    return np.column_stack([c[0] + r * np.cos(t), c[1] + r * np.sin(t)])
+
+
+def cylinder_model(R=6.0, L=5.0, **kw):
+    z = np.linspace(0.0, L, 6)
+    return build_model(z, [circle(R)] * len(z), ModelParams(n_theta=128, **kw))
+
+
+def test_cylinder_layer_volumes_match_closed_form():
+    # circle R: skin offsets are circles R-0.5, R-1.5; f3 = (1.5 + t3) / R puts ring 3 at R-1.5-t3;
+    # the bone is a circle of the given diameter. 128-gon areas are 0.04 % below the circles.
+    R, L, t3, bone_d = 6.0, 5.0, 1.2, 2.0
+    m = cylinder_model(R, L, layer3_mm=t3, bone_diameter_mm=bone_d, bone_offset_mm=0.8)
+    radii = [R, R - 0.5, R - 1.5, R - 1.5 - t3, bone_d / 2]
+    shells = np.pi * np.square(radii) * L
+    expect = shells - np.append(shells[1:], 0.0)
+    assert m.layer_volumes_mm3() == pytest.approx(expect, rel=2e-3)
+    assert m.derived["f3"] == pytest.approx((1.5 + t3) / R, rel=1e-3)
+
+
+def test_skin_thickness_is_constant_all_round_on_the_human_preset():
+    from fem.model import _min_gap, check_polygon, preset_sections
+
+    z, polys, _ = preset_sections("human")
+    m = build_model(z, polys, params_for("human"))
+    for k in (0, len(z) // 2, len(z) - 1):
+        outline = check_polygon(polys[k], "test")
+        for ring, depth in ((1, 0.5), (2, 1.5)):
+            # every ring vertex lies exactly `depth` inside the section outline (exact erosion)
+            pts = m.rings[k, ring]
+            d = [_min_gap(outline, p[None]) for p in pts]
+            assert np.allclose(d, depth, atol=1e-6)
+    # the resampled 64-gon's chords cut the most curved (dorsal-lateral) corners: thinnest 3.3 % less
+    assert m.derived["min_thickness"][0] == pytest.approx(0.5, rel=0.05)
+
+
+def test_presets_have_the_thesis_sizes_and_nested_outward_shells():
+    for preset, width in (("human", 16.0), ("monkey", 8.0)):
+        m = model_from_args(None, preset, params_for(preset))
+        w = np.ptp(m.rings[:, 0, :, 0], axis=1)
+        assert w.min() == pytest.approx(width, rel=0.03), preset
+        shells = m.shell_volumes_mm3()
+        assert np.all(shells > 0) and np.all(np.diff(shells) < 0), preset
+        bone_w = np.ptp(m.rings[:, 4, :, 0], axis=1)
+        mid = len(m.z_mm) // 2
+        assert bone_w[mid] == pytest.approx(2.0, rel=0.05), preset      # about 2 mm bone
+
+
+def test_outer_volume_matches_the_parametric_fingertip():
+    from reconstruct.synthetic import make_shape
+
+    m = model_from_args(None, "monkey", params_for("monkey"))
+    shape = make_shape("fingertip", preset="monkey", rod=False)
+    exact = shape.volume_mm3(m.z_mm[0], m.z_mm[-1])
+    assert m.shell_volumes_mm3()[0] == pytest.approx(exact, rel=0.01)
+
+
+def test_bone_is_shifted_towards_the_nail_by_the_offset():
+    m = cylinder_model(bone_offset_mm=1.3)
+    bone_c = m.rings[:, 4].mean(axis=1)           # regular polygon: vertex mean = centroid
+    assert np.allclose(bone_c - m.centroids, [0.0, -1.3], atol=1e-9)
+
+
+def test_bone_profile_table_sets_the_bone_width_along_z():
+    m = cylinder_model(R=6.0, L=5.0, bone_profile=((0.0, 0.3), (1.0, 0.1)))
+    w = np.ptp(m.rings[:, 4, :, 0], axis=1) / np.ptp(m.rings[:, 0, :, 0], axis=1)
+    assert w == pytest.approx(np.linspace(0.3, 0.1, len(m.z_mm)), rel=1e-6)
+
+
+def test_shells_are_closed_and_consistently_oriented():
+    import trimesh
+
+    m = model_from_args(None, "monkey", params_for("monkey"))
+    for i in range(5):
+        s = trimesh.Trimesh(m.vertices(), m.faces(i))
+        assert s.is_watertight and s.is_winding_consistent and s.volume > 0
+    merged = m.faces()
+    assert len(np.unique(np.sort(merged, axis=1), axis=0)) == len(merged)   # each face once
+
+
+# ------------------------------------------------------------------ bad input: exit 2, nothing written
+def write_sections(folder, polys, zs=None):
+    folder.mkdir(parents=True, exist_ok=True)
+    zs = zs if zs is not None else np.arange(len(polys), dtype=float)
+    data = {"units": "mm", "sections": [{"z": float(z), "points": np.asarray(p).tolist()} for z, p in zip(zs, polys)]}
+    (folder / "sections.json").write_text(json.dumps(data))
+    return folder
+
+
+def run_bad(args, out, capsys):
+    assert pipeline.main(["mesh", *args, "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error: ") and "\n" not in err
+    assert not out.exists()
+    return err
+
+
+def test_open_section_is_refused(tmp_path, capsys):
+    arc = circle(6.0, 360)[:180]                      # half a circle: a gap of 12 mm
+    src = write_sections(tmp_path / "s", [circle(6.0), arc, circle(6.0)])
+    assert "not closed" in run_bad([str(src)], tmp_path / "o", capsys)
+
+
+def test_self_intersecting_section_is_refused(tmp_path, capsys):
+    bowtie = [[-5, -5], [5, 5], [5, -5], [-5, 5]]
+    src = write_sections(tmp_path / "s", [circle(6.0), bowtie])
+    assert "intersects itself" in run_bad([str(src)], tmp_path / "o", capsys)
+
+
+def test_layer_thicker_than_section_is_refused(tmp_path, capsys):
+    src = write_sections(tmp_path / "s", [circle(1.2)] * 3)
+    assert "thicker than the section" in run_bad([str(src)], tmp_path / "o", capsys)
+    src = write_sections(tmp_path / "s2", [circle(6.0)] * 3)
+    assert "thicker than the section" in run_bad([str(src), "--layer3", "5"], tmp_path / "o", capsys)
+
+
+def test_bone_outside_the_section_is_refused(tmp_path, capsys):
+    src = write_sections(tmp_path / "s", [circle(6.0)] * 3)
+    assert "bone" in run_bad([str(src), "--bone-offset", "4"], tmp_path / "o", capsys)
+    assert "bone" in run_bad(["--preset", "human", "--bone-diameter", "12"], tmp_path / "o", capsys)
+
+
+@pytest.mark.parametrize("preset, args", [
+    ("monkey", ["--size", "0"]), ("monkey", ["--size", "-0.5"]), ("monkey", ["--coarse", "0"]),
+    ("monkey", ["--epidermis", "0"]), ("monkey", ["--dermis", "-1"]), ("monkey", ["--bone-diameter", "0"]),
+    ("monkey", ["--growth", "0"]), ("cylinder8", ["--size", "0"]), ("block", ["--coarse", "-1"]),
+    ("square", ["--fine-depth", "0"])])
+def test_zero_or_negative_sizes_are_refused(tmp_path, capsys, preset, args):
+    run_bad(["--preset", preset, *args], tmp_path / "o", capsys)
+
+
+def test_other_bad_options_are_refused(tmp_path, capsys):
+    run_bad(["--preset", "dog"], tmp_path / "o", capsys)
+    run_bad([], tmp_path / "o", capsys)                                           # no source, no preset
+    run_bad(["--preset", "monkey", "--bone"], tmp_path / "o", capsys)
+    run_bad(["--preset", "monkey", "--bone-profile", "0:0.2,x"], tmp_path / "o", capsys)
+    run_bad(["--preset", "monkey", "--nail-z", "0.8", "0.2"], tmp_path / "o", capsys)
+    run_bad(["--preset", "monkey", "--section-z", "99"], tmp_path / "o", capsys)
+    run_bad([str(tmp_path / "missing")], tmp_path / "o", capsys)
