@@ -441,7 +441,7 @@ class ContactModel:
 # --------------------------------------------------------------------------- experiments on a model folder
 EXPERIMENT_KEYS = {"name", "indentor", "orientation", "position_mm", "incline_deg", "approach",
                    "depth_mm", "force_N", "equal_force", "max_depth_mm", "sweep"}
-SCENE_KEYS = {"model", "material", "nu", "receptors", "output", "experiment"}
+SCENE_KEYS = {"material", "nu", "receptors", "output", "experiment"}
 RECEPTOR_KEYS = {"depths_mm", "spacing_mm", "line", "measures"}
 OUTPUT_KEYS = {"pvd", "plots"}
 

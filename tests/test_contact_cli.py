@@ -86,3 +86,36 @@ def test_thesis_trend_cylinders_at_constant_force(cyl8):
     assert all(b < a for a, b in zip(peak, peak[1:])), peak
     assert all(b < a for a, b in zip(depth, depth[1:])), depth
     assert all(r.kkt["ok"] for r in res)
+
+
+def test_shipped_scenes_are_valid():
+    from pathlib import Path
+
+    from fem.contact import load_scene, parse_sweep, parse_values
+    from fem.indentors import shapes_for
+
+    scenes = sorted((Path(pipeline.__file__).parent / "scenes").glob("*.toml"))
+    assert len(scenes) >= 8
+    for path in scenes:
+        for exp in load_scene(path)["experiment"]:
+            shapes_for(exp["indentor"])
+            if "depth_mm" in exp:
+                assert parse_values(exp["depth_mm"]).min() > 0
+            if "sweep" in exp:
+                assert len(parse_sweep(exp["sweep"])[1]) > 1
+
+
+@pytest.mark.parametrize("scene", ["bars", "two_point"])
+def test_2d_scenes_run(cyl8, tmp_path, scene):
+    from pathlib import Path
+
+    path = Path(pipeline.__file__).parent / "scenes" / f"{scene}.toml"
+    assert pipeline.main(["indent", str(cyl8), "--scene", str(path), "--out", str(tmp_path / scene),
+                          "--no-pvd", "--quiet"]) == 0
+    if scene == "two_point":
+        rows = _rows(tmp_path / scene / "equal_force_2mm.csv")
+        np.testing.assert_allclose([float(rows[0]["force_part0_N"]), float(rows[0]["force_part1_N"])],
+                                   0.0005, rtol=1e-5)
+    else:
+        peaks = [float(_rows(tmp_path / scene / f"bar_{w}.csv")[0]["force_N"]) for w in ("0.5", "1.5", "3.0")]
+        assert peaks[0] < peaks[1] < peaks[2]                 # wider bar, more force at 1 mm
