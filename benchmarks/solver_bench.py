@@ -79,6 +79,7 @@ def main(argv=None):
     ap.add_argument("--out", default=str(Path(__file__).parent / "results" / "solver_bench.md"))
     args = ap.parse_args(argv)
 
+    load_start = os.getloadavg()[0]
     sizes = [(6, 4), (10, 6), (14, 10), (20, 14)] + ([] if args.quick else [(26, 22)])
     rows = []
     for n_arc, n_rad in sizes:
@@ -108,7 +109,8 @@ def main(argv=None):
     md = f"""# Solver benchmark
 
 `python benchmarks/solver_bench.py{' --quick' if args.quick else ''}` on {platform.machine()}, {os.cpu_count()} cores
-(shared machine), backend `{rows[0]['backend']}`. Lame thick sphere octant (a = 1, b = 2 mm,
+shared with other jobs (load average {load_start:.1f} at the start, {os.getloadavg()[0]:.1f} at the end:
+times are wall-clock under that load), backend `{rows[0]['backend']}`. Lame thick sphere octant (a = 1, b = 2 mm,
 p = 0.01 MPa, E = 0.01 MPa) with exact surface tractions; P2 + per-layer P1 pressure.
 
 ## Cost and error against mesh size (nu = 0.48)

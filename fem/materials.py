@@ -54,7 +54,7 @@ class Material:
                 raise InputError(f"material code '{spec}' is not of the form mABCDE (digit k = "
                                  "log10 of layer k's Young's modulus in Pa), e.g. m43338")
             code = spec.strip()
-            E = {k + 1: 10.0 ** int(d) * 1e-6 for k, d in enumerate(m.group(1))}
+            E = {k + 1: 10.0 ** (int(d) - 6) for k, d in enumerate(m.group(1))}   # Pa -> MPa
         elif isinstance(spec, Mapping):
             E = {int(k): float(v) for k, v in spec.items()}
         else:

@@ -158,6 +158,9 @@ class LinearSystem:
     def _solve_free(self, b):
         x = self._factor(b)
         self.residual = self._factor.residual(x, b)
+        if self.residual > 1e-6:
+            warnings.warn(f"linear solve residual {self.residual:.1e} is large: the model is nearly "
+                          "singular or badly conditioned", stacklevel=3)
         return x
 
     def solve(self, f: np.ndarray) -> np.ndarray:
@@ -217,6 +220,12 @@ class Model:
         if points.ndim != 2 or points.shape[1] < self.dim:
             raise InputError(f"points must be (N, {self.dim}) or (N, 3), got shape {points.shape}")
         p = np.ascontiguousarray(points[:, :self.dim].T)
+        if cells.size and (cells.min() < 0 or cells.max() >= len(points)):
+            raise InputError(f"cells refer to point ids outside 0..{len(points) - 1}")
+        orphans = len(points) - len(np.unique(cells))
+        if orphans:
+            raise InputError(f"{orphans} mesh points belong to no cell; remove them "
+                             "(meshio: mesh.remove_orphaned_nodes())")
         cells = self._oriented(p, cells)
         self.mesh = (MeshTet if self.dim == 3 else MeshTri)(p, np.ascontiguousarray(cells.T))
         self.layer = np.asarray(layer, dtype=np.int64).ravel()
@@ -262,8 +271,9 @@ class Model:
         x = p.T[cells]
         e = x[:, 1:] - x[:, :1]
         det = np.linalg.det(e) if len(cells) else np.zeros(0)
-        if np.any(np.abs(det) <= 1e-14 * np.max(np.abs(e)) ** len(p)):
-            raise InputError(f"{int(np.sum(np.abs(det) <= 0))} degenerate (zero-volume) cells in the mesh")
+        flat = np.abs(det) <= 1e-14 * np.max(np.abs(e), initial=0.0) ** len(p)
+        if flat.any():
+            raise InputError(f"{int(flat.sum())} degenerate (zero-volume) cells in the mesh; remove them")
         cells = cells.copy()
         neg = det < 0
         cells[neg, 0], cells[neg, 1] = cells[neg, 1], cells[neg, 0].copy()
@@ -495,10 +505,7 @@ class Model:
             dofs.append(d)
             vals.append(v)
         rigid = np.isin(self.layer, list(self.material.rigid))
-        held = np.ones(self.ndof, dtype=bool)       # rigid-layer nodes (interfaces too), unused nodes
-        held[self.basis.element_dofs[:, ~rigid].ravel()] = False
-        held[self.basis.element_dofs[:, rigid].ravel()] = True
-        held = np.flatnonzero(held)
+        held = np.unique(self.basis.element_dofs[:, rigid])     # rigid-layer nodes, interfaces too
         dofs.append(held)
         vals.append(np.zeros(len(held)))
         dofs, vals = np.concatenate(dofs), np.concatenate(vals)
@@ -516,13 +523,13 @@ class Model:
         n, d = self.mesh.nvertices, self.dim
         t = self.mesh.t
         adj = sp.coo_matrix((np.ones(t.size), (np.repeat(t[0], t.shape[0]), t.T.ravel())), shape=(n, n))
-        ncomp, label = connected_components(adj, directed=False)
+        _, label = connected_components(adj, directed=False)
         node_label = np.concatenate([label, label[self._edges[0]]])
         names = ["translation x", "translation y", "translation z"][:d] + (
             ["rotation about x", "rotation about y", "rotation about z"] if d == 3 else ["rotation about z"])
         is_fixed = np.zeros(self.ndof, dtype=bool)
         is_fixed[fixed] = True
-        for c in range(ncomp):
+        for c in np.unique(label[t]):               # vertices outside every cell are simply held
             nodes = np.flatnonzero(node_label == c)
             x = self.nodes[nodes] - self.nodes[nodes].mean(axis=0)
             x /= max(np.abs(x).max(), 1e-300)
@@ -536,7 +543,7 @@ class Model:
             free = [names[np.argmax(np.abs(v))] for v in V[len(s[s > 1e-8 * max(s.max(initial=0), 1)]):]]
             if free:
                 raise InputError(f"the system is singular: nothing holds {', '.join(free)}"
-                                 + (f" of mesh part {c + 1} of {ncomp}" if ncomp > 1 else "")
+                                 + (f" of mesh part {c + 1}" if len(np.unique(label[t])) > 1 else "")
                                  + "; prescribe displacements on a region, e.g. prescribed={'nail': 0.0}")
 
     def system(self, prescribed=None) -> LinearSystem:
