@@ -130,6 +130,9 @@ def _add_mesh(sub):
                                                           "(30 for the thesis platform; default 0)")
     p.add_argument("--z-range", type=float, nargs=2, metavar=("Z0", "Z1"),
                    help="use only the sections in this z range (mm)")
+    p.add_argument("--tip-width-frac", type=float, default=0.9,
+                   help="sections.json: end the model distally where the section width drops below this "
+                        "fraction of the widest (the rounded tip is not modelled; default 0.9)")
     p.add_argument("--force", action="store_true", help="rebuild the mesh, ignoring the cache")
     p.add_argument("--quiet", action="store_true", help="no progress and no summary")
     p.set_defaults(run=_run_mesh)

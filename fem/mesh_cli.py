@@ -49,7 +49,7 @@ def run_mesh_command(args) -> str:
                                           fine_depth_mm=args.fine_depth))
         if args.section_z is not None:
             model = model_from_args(args.source, args.preset, model_params(args),
-                                    z_range_mm=_tuple(args.z_range))
+                                    z_range_mm=_tuple(args.z_range), tip_width_frac=args.tip_width_frac)
             domain = mesh2d.section_domain(model, args.section_z)
         else:
             if args.source is not None:
@@ -59,7 +59,8 @@ def run_mesh_command(args) -> str:
         return mesh2d.summary(rep, args.out)
     from fem.mesh import Sizing, run_mesh, summary
 
-    model = model_from_args(args.source, args.preset, model_params(args), z_range_mm=_tuple(args.z_range))
+    model = model_from_args(args.source, args.preset, model_params(args), z_range_mm=_tuple(args.z_range),
+                            tip_width_frac=args.tip_width_frac)
     sizing = Sizing(**_given(size_mm=args.size, coarse_mm=args.coarse, growth=args.growth,
                              fine_depth_mm=args.fine_depth))
     _, rep, info = run_mesh(args.out, model, sizing, force=args.force, progress=not args.quiet)

@@ -222,6 +222,8 @@ class LayeredModel:
                             "incline_deg": p.support_incline_deg,
                             "vertical_up": [0.0, float(np.cos(a)), float(-np.sin(a))]},
                 "volar": {"span_deg": p.volar_span_deg, "centre": [0, 1], "z_frac": [0.0, 1.0]},
+                "proximal": {"what": "flat proximal cut (end cap at z0), free unless the solver fixes it"},
+                "distal": {"what": "flat distal cut where the rounded tip starts (end cap at z1), free"},
             },
         }
 
@@ -233,7 +235,10 @@ def _jsonable(d):
 # ---------------------------------------------------------------------- sections in
 def check_polygon(points: np.ndarray, where: str) -> np.ndarray:
     """Validate one section polygon (n, 2) mm; return it counter-clockwise, last point not repeated."""
-    p = np.asarray(points, float)
+    try:
+        p = np.asarray(points, float)
+    except (ValueError, TypeError):
+        raise InputError(f"{where}: points must be a list of finite [x, y] pairs") from None
     if p.ndim != 2 or p.shape[1] != 2 or not np.all(np.isfinite(p)):
         raise InputError(f"{where}: points must be a list of finite [x, y] pairs")
     if len(p) > 3 and np.allclose(p[0], p[-1]):
@@ -424,8 +429,9 @@ def _min_gap(outer: np.ndarray, inner: np.ndarray) -> float:
 
 
 def model_from_args(source: str | None, preset: str | None, params: ModelParams, dz_mm: float = 1.0,
-                    z_range_mm: tuple | None = None) -> LayeredModel:
-    """The layered model from a folder/file with sections.json or a preset name."""
+                    z_range_mm: tuple | None = None, tip_width_frac: float = 0.9) -> LayeredModel:
+    """The layered model from a folder/file with sections.json or a preset name. Sections are cut
+    to z_range_mm, by default to the body before the rounded tip (see body_z_range)."""
     if (source is None) == (preset is None):
         raise InputError("give either a folder with sections.json or --preset (human, monkey), not both")
     if preset is not None:
@@ -434,11 +440,26 @@ def model_from_args(source: str | None, preset: str | None, params: ModelParams,
         z, polys, digest = preset_sections(preset, dz_mm)
     else:
         z, polys, digest = load_sections(source)
+        polys = [check_polygon(p, f"section at z={zi:g} mm") for zi, p in zip(z, polys)]
+        if z_range_mm is None:
+            z_range_mm = body_z_range(z, polys, tip_width_frac)
     if z_range_mm is not None:
         lo, hi = z_range_mm
-        keep = (z >= lo) & (z <= hi)
+        keep = (z >= lo - 1e-9) & (z <= hi + 1e-9)
         z, polys = z[keep], [p for p, k in zip(polys, keep) if k]
     return build_model(z, polys, params, preset, digest)
+
+
+def body_z_range(z: np.ndarray, polys: list, tip_width_frac: float) -> tuple[float, float]:
+    """z range from the first section to the last one, distal of the widest, still at least
+    tip_width_frac of the widest width: the rounded tip beyond it is not modelled (thesis 6.1)."""
+    if not 0 < tip_width_frac <= 1:
+        raise InputError(f"tip_width_frac must be in (0, 1]; got {tip_width_frac}")
+    width = np.array([np.ptp(p[:, 0]) for p in polys])
+    k = int(np.argmax(width))
+    while k + 1 < len(z) and width[k + 1] >= tip_width_frac * width.max():
+        k += 1
+    return float(z[0]), float(z[k])
 
 
 def params_for(preset: str | None, **overrides) -> ModelParams:

@@ -35,7 +35,7 @@ def test_file_contract(built):
     assert list(m.cells_dict) == ["tetra"]
     layer = m.cell_data["layer"][0]
     assert layer.dtype == np.int32 and set(np.unique(layer)) == {1, 2, 3, 4, 5}
-    for name in ("nail", "support", "volar"):
+    for name in ("nail", "support", "volar", "proximal", "distal"):
         assert m.point_data[name].dtype == np.uint8
     assert np.all(tet_volumes(m.points, m.cells_dict["tetra"]) > 0)          # positive orientation
     assert info["material"] == "m43338" and info["nu"] == 0.48
@@ -82,6 +82,9 @@ def test_regions_are_non_empty_and_on_the_right_side(built):
     nail, support = m.point_data["nail"].astype(bool), m.point_data["support"].astype(bool)
     assert zf[nail].min() >= 0.3 - 1e-6 and zf[support].max() <= 0.3 + 1e-6
     assert info["mesh"]["regions"]["nail"]["facets"] == m.point_data["nail"][bf].all(axis=1).sum()
+    for name, z in (("proximal", model.z_mm[0]), ("distal", model.z_mm[-1])):
+        flag = m.point_data[name].astype(bool)
+        assert flag[bf].all(axis=1).sum() > 20 and np.allclose(m.points[flag, 2], z, atol=0.03), name
 
 
 def test_bone_offset_matches_the_parameter(built):

@@ -6,6 +6,7 @@ import pytest
 
 import pipeline
 from fem.model import ModelParams, build_model, model_from_args, params_for
+from reconstruct.errors import InputError
 
 
 def circle(r, n=360, c=(0.0, 0.0)):
@@ -149,3 +150,20 @@ def test_other_bad_options_are_refused(tmp_path, capsys):
     run_bad(["--preset", "monkey", "--nail-z", "0.8", "0.2"], tmp_path / "o", capsys)
     run_bad(["--preset", "monkey", "--section-z", "99"], tmp_path / "o", capsys)
     run_bad([str(tmp_path / "missing")], tmp_path / "o", capsys)
+
+
+def test_sections_json_with_the_tip_is_cut_before_the_rounded_tip(tmp_path):
+    from reconstruct.synthetic import make_shape
+
+    shape = make_shape("fingertip", preset="human", rod=False)
+    z = np.arange(0.0, 21.75, 0.5)                      # body 0-15 mm, rounded tip 15-22 mm
+    polys = [shape.convex_section(zi, 90 + 7 * i) for i, zi in enumerate(z)]   # unequal counts
+    src = write_sections(tmp_path / "s", polys, z)
+    m = model_from_args(str(src), None, params_for(None))
+    # widest section is about z = 7.5 (taper); width stays >= 90 % of it to about 4 mm into the tip
+    assert 15.0 <= m.z_mm[-1] <= 19.0 and m.z_mm[0] == 0.0
+    assert len(m.sections_sha256) == 64 and m.preset is None
+    full = model_from_args(str(src), None, params_for(None), z_range_mm=(2.0, 9.0))
+    assert full.z_mm[0] == 2.0 and full.z_mm[-1] == 9.0
+    with pytest.raises(InputError, match="thicker than the section"):        # 0.37 x width at 21.5
+        model_from_args(str(src), None, params_for(None), z_range_mm=(0.0, 21.5))
