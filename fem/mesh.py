@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fem.model import N_LAYERS, LayeredModel
+from fem.model import N_LAYERS, LayeredModel, check_positive
 from reconstruct.errors import InputError
 from reconstruct.io import staged_output, write_json
 
@@ -51,18 +51,22 @@ class Sizing:
     opt_iter: int = 20
 
     def check(self) -> None:
-        for name in ("size_mm", "coarse_mm", "growth", "fine_depth_mm", "epsilon_mm"):
-            if not getattr(self, name) > 0:
-                raise InputError(f"{name} must be > 0 (got {getattr(self, name)})")
-        if self.size_mm < 0.1:
-            raise InputError(f"size_mm {self.size_mm} is below 0.1 mm: that mesh would not fit in memory")
-        if self.coarse_mm < self.size_mm:
-            raise InputError(f"coarse_mm ({self.coarse_mm}) must be >= size_mm ({self.size_mm})")
+        check_sizes(self, 0.1)
+        check_positive(self, "epsilon_mm")
         lo, hi = self.fine_z_frac
         if not 0 <= lo < hi <= 1:
             raise InputError(f"fine_z_frac must be two fractions 0 <= lo < hi <= 1; got {lo} {hi}")
         if self.opt_iter < 1:
             raise InputError(f"opt_iter must be >= 1; got {self.opt_iter}")
+
+
+def check_sizes(sizing, min_size_mm: float) -> None:
+    """Raise InputError unless the sizing's lengths are positive and min_size_mm <= size <= coarse."""
+    check_positive(sizing, "size_mm", "coarse_mm", "growth", "fine_depth_mm")
+    if sizing.size_mm < min_size_mm:
+        raise InputError(f"size_mm {sizing.size_mm} is below {min_size_mm} mm: too many elements for this machine")
+    if sizing.coarse_mm < sizing.size_mm:
+        raise InputError(f"coarse_mm ({sizing.coarse_mm}) must be >= size_mm ({sizing.size_mm})")
 
 
 @dataclass

@@ -33,13 +33,9 @@ class Sizing2D:
     fine_depth_mm: float = 1.0
 
     def check(self) -> None:
-        for name in ("size_mm", "coarse_mm", "growth", "fine_depth_mm"):
-            if not getattr(self, name) > 0:
-                raise InputError(f"{name} must be > 0 (got {getattr(self, name)})")
-        if self.size_mm < 0.01:
-            raise InputError(f"size_mm {self.size_mm} is below 0.01 mm: too many elements")
-        if self.coarse_mm < self.size_mm:
-            raise InputError(f"coarse_mm ({self.coarse_mm}) must be >= size_mm ({self.size_mm})")
+        from fem.mesh import check_sizes
+
+        check_sizes(self, 0.01)
 
 
 @dataclass

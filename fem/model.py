@@ -33,6 +33,13 @@ PRESET_PARAMS = {
 }
 
 
+def check_positive(obj, *names: str) -> None:
+    """Raise InputError unless every named attribute of obj is > 0."""
+    for name in names:
+        if not getattr(obj, name) > 0:
+            raise InputError(f"{name} must be > 0 (got {getattr(obj, name)})")
+
+
 @dataclass(frozen=True)
 class ModelParams:
     """Every parameter of the layered model. Lengths in mm, angles in degrees.
@@ -69,9 +76,7 @@ class ModelParams:
 
     def check(self) -> None:
         """Raise InputError for impossible values."""
-        for name in ("epidermis_mm", "dermis_mm", "layer3_mm", "bone_diameter_mm"):
-            if not getattr(self, name) > 0:
-                raise InputError(f"{name} must be > 0 (got {getattr(self, name)})")
+        check_positive(self, "epidermis_mm", "dermis_mm", "layer3_mm", "bone_diameter_mm")
         if self.bone_offset_mm < 0:
             raise InputError(f"bone_offset_mm must be >= 0 (towards the nail, -y); got {self.bone_offset_mm}")
         if self.layer3_scale is not None and not 0 < self.layer3_scale < 1:
