@@ -70,7 +70,10 @@ def write_report(rec, path) -> None:
 
     a = ax[1, 2]
     a.axis("off")
-    a.text(0, 1, rec.summary(), family="monospace", fontsize=6.5, va="top", wrap=True)
+    import textwrap
+
+    text = "\n".join(textwrap.fill(line, 70, subsequent_indent=" " * 16) for line in rec.summary().splitlines())
+    a.text(0, 1, text, family="monospace", fontsize=7, va="top")
     fig.tight_layout()
     fig.savefig(path, dpi=80)
     plt.close(fig)

@@ -1,10 +1,11 @@
 """Silhouette borders with sub-pixel accuracy, robust to uneven lighting, noise and blur.
 
-Method: Otsu threshold (OpenCV) for a coarse mask of the dark object; a smooth background
-illumination map fitted to the background pixels (a polynomial in x, y); the image divided by
-it and mapped to 0 (object) .. 1 (background); the border is where that normalised image crosses
-0.5, i.e. the local 50 % level between background and object, found on each row by linear
-interpolation between the two pixels that straddle it.
+Method: Otsu threshold (OpenCV) for a coarse mask of the dark object (largest connected part);
+a smooth illumination map fitted to the background (a polynomial in x, y); grey levels divided
+by it and mapped to 0 (object) .. 1 (background); the border is where that crosses 0.5, i.e.
+the local 50 % level between background and object, found on each row near the coarse edge by
+linear interpolation between the two pixels that straddle it. The model is evaluated only at
+the pixels the search looks at.
 """
 from __future__ import annotations
 
@@ -47,89 +48,99 @@ class Borders:
 _POWERS = np.array([(i, j) for i in range(_POLY_DEGREE + 1) for j in range(_POLY_DEGREE + 1 - i)])
 
 
-def _poly_terms(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """(n, k) monomials x^i y^j with i + j <= _POLY_DEGREE, coordinates scaled to [-1, 1]."""
-    return x[:, None] ** _POWERS[:, 0] * y[:, None] ** _POWERS[:, 1]
+def _powers(v: np.ndarray) -> np.ndarray:
+    """(n, _POLY_DEGREE + 1) powers 0.. of v."""
+    return np.vander(v, _POLY_DEGREE + 1, increasing=True)
 
 
-def illumination(img: np.ndarray, background_mask: np.ndarray, step: int = 12) -> np.ndarray:
-    """Smooth background brightness map (H, W) fitted to pixels where background_mask is True
-    (fitted on every `step`-th pixel, evaluated everywhere as Y @ C @ X.T)."""
-    h, w = img.shape
-    ys, xs = np.mgrid[0:h:step, 0:w:step]
-    keep = background_mask[::step, ::step]
-    if keep.sum() < 50:
-        raise InputError("the object fills the image: leave background visible around the finger")
-    sx, sy = 2.0 / max(w - 1, 1), 2.0 / max(h - 1, 1)
-    coef, *_ = np.linalg.lstsq(_poly_terms(xs[keep] * sx - 1, ys[keep] * sy - 1),
-                               img[::step, ::step][keep].astype(float), rcond=None)
-    c = np.zeros((_POLY_DEGREE + 1, _POLY_DEGREE + 1))      # c[i, j] multiplies x^i y^j
-    c[_POWERS[:, 0], _POWERS[:, 1]] = coef
-    xp = (np.arange(w) * sx - 1)[:, None] ** np.arange(_POLY_DEGREE + 1)
-    yp = (np.arange(h) * sy - 1)[:, None] ** np.arange(_POLY_DEGREE + 1)
-    return yp @ c.T @ xp.T
+@dataclass
+class Lighting:
+    """Illumination model of one image: background brightness is a polynomial in (x, y) (degree
+    _POLY_DEGREE, coordinates scaled to [-1, 1]); the object reflects a fixed fraction r_object
+    of it. `normalised(img, rows, cols)` maps grey levels to 0 (object) .. 1 (background)."""
+
+    coef: np.ndarray           # (d+1, d+1), coef[i, j] multiplies x^i y^j
+    shape: tuple[int, int]
+    r_object: float
+
+    @classmethod
+    def fit(cls, img: np.ndarray, mask: np.ndarray, step: int = 12) -> "Lighting":
+        """Fit to the background (pixels well outside the mask) on every step-th pixel."""
+        k = np.ones((7, 7), np.uint8)
+        sub = (slice(None, None, step // 2), slice(None, None, step // 2))
+        outside = (cv2.dilate(mask.astype(np.uint8), k, iterations=2) == 0)[sub]
+        inside = cv2.erode(mask.astype(np.uint8), k, iterations=1).astype(bool)[sub]
+        if outside.sum() < 50:
+            raise InputError("the object fills the image: leave background visible around the finger")
+        rows, cols = np.mgrid[0:img.shape[0]:step // 2, 0:img.shape[1]:step // 2]
+        x, y = cls._xy(img.shape, rows[outside], cols[outside])
+        coef, *_ = np.linalg.lstsq(_powers(x)[:, _POWERS[:, 0]] * _powers(y)[:, _POWERS[:, 1]],
+                                   img[sub][outside].astype(float), rcond=None)
+        c = np.zeros((_POLY_DEGREE + 1, _POLY_DEGREE + 1))
+        c[_POWERS[:, 0], _POWERS[:, 1]] = coef
+        light = cls(c, img.shape, 0.0)
+        if inside.sum() < 10:
+            inside = mask[sub]
+        ratio = img[sub][inside] / light.brightness(rows[inside], cols[inside])
+        light.r_object = float(np.median(ratio))
+        return light
+
+    @staticmethod
+    def _xy(shape, rows, cols):
+        h, w = shape
+        return cols * (2.0 / max(w - 1, 1)) - 1, rows * (2.0 / max(h - 1, 1)) - 1
+
+    def brightness(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """Background grey level at pixels (rows, cols) (1-D arrays)."""
+        x, y = self._xy(self.shape, rows, cols)
+        return np.maximum(((_powers(x) @ self.coef) * _powers(y)).sum(axis=1), 1.0)
+
+    def normalised(self, img: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """Grey levels at (rows, cols) mapped to 0 (object) .. 1 (background)."""
+        ratio = img[rows, cols] / self.brightness(rows, cols)
+        return (ratio - self.r_object) / max(1.0 - self.r_object, 1e-6)
 
 
 def object_mask(img: np.ndarray, name: str = "image") -> tuple[np.ndarray, float]:
-    """Largest dark connected region with holes filled (H, W bool), and the Otsu level."""
+    """Largest dark connected region (H, W bool) and the Otsu level. Holes are kept: only the
+    outermost border on each row matters."""
     level, dark = cv2.threshold(img, 0, 1, cv2.THRESH_BINARY_INV + cv2.THRESH_OTSU)
-    dark = dark.astype(bool)
-    if dark.sum() < 0.001 * img.size or (~dark).sum() < 0.001 * img.size:
+    n_dark = int(dark.sum())
+    if n_dark < 0.001 * img.size or n_dark > 0.999 * img.size:
         raise InputError(f"no object found in {name}: the finger must be dark on a bright background")
-    contrast = float(np.median(img[~dark])) - float(np.median(img[dark]))
+    sub = dark[::3, ::3].astype(bool)
+    contrast = float(np.median(img[::3, ::3][~sub])) - float(np.median(img[::3, ::3][sub]))
     if contrast < MIN_CONTRAST:
         raise InputError(f"no object found in {name} (contrast {contrast:.0f} grey levels): "
                          f"the finger must be dark on a bright background")
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(dark.astype(np.uint8), connectivity=8)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(dark, connectivity=8)
     biggest = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
-    mask = (labels == biggest).astype(np.uint8)
-    # fill holes: background = what is reachable from outside the mask
-    flood = np.pad(1 - mask, 1, constant_values=1)
-    cv2.floodFill(flood, None, (0, 0), 2)
-    mask = np.pad(mask, 1) | (flood == 1)
-    return mask[1:-1, 1:-1].astype(bool), float(level)
+    return labels == biggest, float(level)
 
 
-def normalise(img: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, float, float]:
-    """Image mapped to 0 (object) .. 1 (background) by the local illumination; also the median
-    background and object grey levels."""
-    k = np.ones((7, 7), np.uint8)
-    outside = cv2.dilate(mask.astype(np.uint8), k, iterations=2) == 0
-    inside = cv2.erode(mask.astype(np.uint8), k, iterations=1).astype(bool)
-    if inside.sum() < 10:
-        inside = mask
-    light = illumination(img, outside)
-    ratio = img / np.maximum(light, 1.0)
-    sub = (slice(None, None, 3), slice(None, None, 3))      # medians from every 9th pixel
-    r_obj = float(np.median(ratio[sub][inside[sub]]))
-    norm = (ratio - r_obj) / max(1.0 - r_obj, 1e-6)
-    return norm, float(np.median(img[sub][outside[sub]])), float(np.median(img[sub][inside[sub]]))
-
-
-def _crossings(norm: np.ndarray, edge: np.ndarray, rows: np.ndarray, side: int) -> np.ndarray:
-    """Sub-pixel column of the outermost 0.5 crossing near `edge` (coarse mask edge) per row.
-
-    side -1: left border (background on the left), +1: right border.
-    """
-    h, w = norm.shape
-    offsets = np.arange(-_SEARCH_PX, _SEARCH_PX + 1) * -side   # outermost first
+def _crossings(img: np.ndarray, light: Lighting, edge: np.ndarray, rows: np.ndarray, side: int) -> np.ndarray:
+    """Sub-pixel column of the outermost 0.5 crossing within _SEARCH_PX of `edge` (the coarse
+    mask edge) on each row; NaN where there is none. side -1: left border, +1: right border."""
+    w = img.shape[1]
+    window = np.arange(-_SEARCH_PX - 1, _SEARCH_PX + 2)                  # columns edge + window
+    cols = np.clip(edge[:, None] + window, 0, w - 1)
+    vals = light.normalised(img, np.repeat(rows, len(window)), cols.ravel()).reshape(cols.shape)
     out = np.full(len(rows), np.nan)
-    for off in offsets[::-1]:               # later (more outward) hits overwrite earlier ones
-        j_in = edge + off                   # candidate pixel inside (< 0.5)
-        j_out = j_in + side                 # its outer neighbour (>= 0.5)
-        ok = (j_out >= 0) & (j_out < w) & (j_in >= 0) & (j_in < w)
-        jo, ji = np.clip(j_out, 0, w - 1), np.clip(j_in, 0, w - 1)
-        v_out, v_in = norm[rows, jo], norm[rows, ji]
-        hit = ok & (v_out >= 0.5) & (v_in < 0.5)
+    # candidate inside pixel edge + off (< 0.5) next to its outer neighbour (>= 0.5); going
+    # outwards, so that the outermost crossing is the one kept
+    for off in sorted(range(-_SEARCH_PX, _SEARCH_PX + 1), key=lambda o: o * side):
+        j_out = edge + off + side
+        v_in, v_out = vals[:, off + _SEARCH_PX + 1], vals[:, off + side + _SEARCH_PX + 1]
+        hit = (j_out >= 0) & (j_out < w) & (edge + off >= 0) & (edge + off < w) & (v_out >= 0.5) & (v_in < 0.5)
         frac = (v_out - 0.5) / np.where(hit, v_out - v_in, 1.0)
-        out = np.where(hit, jo - side * frac, out)
+        out = np.where(hit, j_out - side * frac, out)
     return out
 
 
 def extract_borders(img: np.ndarray, name: str = "image") -> Borders:
     """Sub-pixel left/right borders on every row of a grey image (H, W) uint8."""
     mask, level = object_mask(img, name)
-    norm, bg, obj = normalise(img, mask)
+    light = Lighting.fit(img, mask)
     h, w = img.shape
     rows = np.flatnonzero(mask.any(axis=1))
     left = np.full(h, np.nan)
@@ -137,10 +148,13 @@ def extract_borders(img: np.ndarray, name: str = "image") -> Borders:
     m = mask[rows]
     first = m.argmax(axis=1)
     last = w - 1 - m[:, ::-1].argmax(axis=1)
-    left[rows] = _crossings(norm, first, rows, -1)
-    right[rows] = _crossings(norm, last, rows, +1)
+    left[rows] = _crossings(img, light, first, rows, -1)
+    right[rows] = _crossings(img, light, last, rows, +1)
     frame = np.zeros(h, bool)
     frame[rows] = (first == 0) | (last == w - 1)
     left[frame] = np.nan
     right[frame] = np.nan
-    return Borders(left, right, frame, bool(mask[0].any()), bool(mask[-1].any()), level, bg, obj)
+    mid = h // 2
+    background = float(light.brightness(np.array([mid]), np.array([w // 2]))[0])
+    return Borders(left, right, frame, bool(mask[0].any()), bool(mask[-1].any()), level,
+                   background, background * light.r_object)
