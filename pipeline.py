@@ -114,6 +114,8 @@ def _add_mesh(sub):
     p.add_argument("--dermis", type=float, help="dermis thickness in mm (default 1.0)")
     p.add_argument("--layer3", type=float, help="layer 3 volar thickness at the reference sections in mm; "
                                                  "sets the thesis scale factor (default human 1.5, monkey 0.55)")
+    p.add_argument("--layer3-scale", type=float, help="give the layer-3 scale factor f3 directly (0-1; "
+                                                       "overrides --layer3)")
     p.add_argument("--bone-diameter", type=float, help="bone width at the middle reference section in mm "
                                                         "(default 2.0)")
     p.add_argument("--bone-profile", help="bone width / section width along the length, 's:ratio,...' with "

@@ -294,7 +294,8 @@ def achieved_sizes(model: LayeredModel, mesh: TetMesh, sizing: Sizing) -> dict:
     edge = np.mean([np.linalg.norm(x[:, i] - x[:, j], axis=1) for i in range(4) for j in range(i + 1, 4)], axis=0)
     return {"fine_zone_median_edge_mm": float(np.median(edge[fine])) if fine.any() else None,
             "fine_zone_tets": int(fine.sum()),
-            "elsewhere_median_edge_mm": float(np.median(edge[~fine])) if (~fine).any() else None}
+            "elsewhere_median_edge_mm": float(np.median(edge[~fine])) if (~fine).any() else None,
+            "median_edge_per_layer_mm": [float(np.median(edge[mesh.layer == L])) for L in range(1, N_LAYERS + 1)]}
 
 
 # ---------------------------------------------------------------------- cache and output
@@ -377,7 +378,8 @@ def summary(rep: dict, info: dict, out_dir) -> str:
               f"  straddling tets: {s['straddling_tets']} (deepest crossing {s['max_crossing_mm']:.3f} mm, "
               f"tolerance {s['tol_mm']:.3f} mm)",
               f"  median edge: volar fine zone {a['fine_zone_median_edge_mm']:.3f} mm, elsewhere "
-              f"{a['elsewhere_median_edge_mm']:.3f} mm",
+              f"{a['elsewhere_median_edge_mm']:.3f} mm; per layer "
+              + " ".join(f"{e:.2f}" for e in a["median_edge_per_layer_mm"]) + " mm",
               f"  bone offset towards the nail: {rep['bone_offset_mm']:.3f} mm",
               "  regions: " + ", ".join(f"{k} {v['facets']} facets" for k, v in rep["regions"].items())]
     return "\n".join(lines)

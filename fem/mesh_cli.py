@@ -24,6 +24,7 @@ def model_params(args):
     """ModelParams from the CLI options (preset defaults for what is not given)."""
     preset = args.preset if args.preset in PRESET_PARAMS else None
     return params_for(preset, epidermis_mm=args.epidermis, dermis_mm=args.dermis, layer3_mm=args.layer3,
+                      layer3_scale=args.layer3_scale,
                       bone_diameter_mm=args.bone_diameter, bone_profile=parse_profile(args.bone_profile),
                       bone_offset_mm=args.bone_offset, nail_span_deg=args.nail_span,
                       nail_z_frac=_tuple(args.nail_z), support_span_deg=args.support_span,
