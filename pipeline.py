@@ -160,8 +160,8 @@ def _add_indent(sub):
     p.add_argument("--axis", "--orientation", dest="orientation", default="parallel",
                    help="indentor length axis: parallel or perpendicular to the finger axis, or an "
                         "angle in degrees (default parallel; 2D models need parallel)")
-    p.add_argument("--position", type=float, nargs=2, default=(0.0, 0.0), metavar=("X", "Z"),
-                   help="indentor position on the pad in mm (default 0 0)")
+    p.add_argument("--position", type=float, nargs=2, metavar=("X", "Z"),
+                   help="indentor position on the pad in mm (default: x = 0 at the middle of the pad)")
     p.add_argument("--incline", type=float, help="finger incline in degrees (default: the model's support)")
     load = p.add_mutually_exclusive_group()
     load.add_argument("--depth", help="depths in mm beyond first touch: start:stop:step or list (e.g. 0:3:0.5)")
@@ -194,7 +194,9 @@ def _run_indent(args):
         if not args.indentor or (args.depth is None and args.force is None):
             raise InputError("indent needs --scene, or --indentor with --depth or --force")
         exp = {"name": args.indentor.replace(":", "_").replace(",", "_"), "indentor": args.indentor,
-               "orientation": args.orientation, "position_mm": list(args.position)}
+               "orientation": args.orientation}
+        if args.position is not None:
+            exp["position_mm"] = list(args.position)
         if args.depth is not None:
             exp["depth_mm"] = args.depth
         else:

@@ -286,6 +286,7 @@ class ContactModel:
         self._compliance = {}
         self.tol_mm = tol_mm
         self._warm = None
+        self._force_depth = 0.5      # first trial depth (mm) of force control; then the last one
 
     @classmethod
     def from_fe(cls, model, system, region: str, observe=None, chunk=64, **kw):
@@ -391,39 +392,42 @@ class ContactModel:
         self._warm = res.force_N > 0
 
     def _force(self, indentor, target, equal_force, max_depth_mm, t0):
+        """Newton on the depth(s) with the exact Jacobian of the current active set, safeguarded:
+        each step at most doubles or halves the depth, and (one unknown) stays inside the
+        bracket of depths known to give too little / too much force. Deep trial depths are
+        avoided because every newly touching node costs one compliance column."""
         if not target > 0:
             raise InputError(f"force must be positive, got {target} N")
         n = indentor.n_parts if equal_force else 1
-        tmax = t0[:n] + max_depth_mm if equal_force else np.array([t0.min() + max_depth_mm])
-        travels = lambda t: t if equal_force else np.full(indentor.n_parts, t[0])
-        res, lcp, sub = self.solve_travel(indentor, travels(tmax), self._warm)
-        reach = res.part_force_N if equal_force else np.array([res.total_force_N])
-        if np.any(reach < target):
-            raise InputError(f"force {target} N is not reached within {max_depth_mm} mm depth "
-                             f"(force there {np.round(reach, 6).tolist()} N): lower the force or raise "
-                             f"the depth limit")
-        lo = t0[:n] if equal_force else np.array([t0.min()])
-        hi = tmax.copy()
-        t = lo + 0.5 * (hi - lo) * 0.1
+        base = t0[:n] if equal_force else np.array([t0.min()])
+        travels = (lambda d: base + d) if equal_force else (lambda d: np.full(indentor.n_parts, base[0] + d[0]))
+        depth = np.full(n, min(self._force_depth, max_depth_mm))
+        lo, hi = np.zeros(n), np.full(n, np.inf)
+        warm = self._warm
         for it in range(1, 101):
-            res, lcp, sub = self.solve_travel(indentor, travels(t), res.force_N > 0)
-            phi = res.part_force_N if equal_force else np.array([res.total_force_N])
-            err = phi - target
+            res, lcp, sub = self.solve_travel(indentor, travels(depth), warm)
+            warm = res.force_N > 0
+            err = (res.part_force_N if equal_force else np.array([res.total_force_N])) - target
             if np.all(np.abs(err) <= FORCE_RTOL * target):
                 self._remember(res)
+                self._force_depth = float(depth.mean())
                 res.kkt["force_iterations"] = it
                 return res
-            if n == 1:
-                (lo if err[0] < 0 else hi)[0] = t[0]
-            J = self._force_jacobian(lcp, res.part[sub], n if equal_force else 1)
+            if np.any((depth >= max_depth_mm) & (err < 0)):
+                raise InputError(f"force {target} N is not reached within {max_depth_mm} mm depth "
+                                 f"(force there {np.round(err + target, 6).tolist()} N): lower the force "
+                                 f"or raise the depth limit")
+            lo = np.where(err < 0, np.maximum(lo, depth), lo)
+            hi = np.where(err > 0, np.minimum(hi, depth), hi)
+            J = self._force_jacobian(lcp, res.part[sub], n)
             try:
-                step = np.linalg.solve(J, -err)
+                new = depth - np.linalg.solve(J, err)
             except np.linalg.LinAlgError:
-                step = np.full(n, np.nan)
-            new = t + step
-            if n == 1 and not (lo[0] < new[0] < hi[0]):
-                new = 0.5 * (lo + hi)
-            t = np.clip(new, t0[:n] if equal_force else t0.min(), tmax)
+                new = np.full(n, np.nan)
+            new = np.where(np.isfinite(new), new, 2 * depth)
+            if n == 1 and not lo[0] < new[0] < hi[0]:
+                new = 0.5 * (lo + np.minimum(hi, 2 * depth))
+            depth = np.minimum(np.clip(new, 0.5 * depth, 2 * depth), max_depth_mm)
         raise RuntimeError(f"force control did not converge for {indentor.name}")
 
     @staticmethod
@@ -540,11 +544,12 @@ def run_scene(model_dir, out_dir, scene: dict, progress: bool = True) -> str:
     measures = list(rc.get("measures", DEFAULT_MEASURES))
     cm = ContactModel.from_fe(model, system, region, observe=sampler.operator)
     up = info.get("regions", {}).get("support", {}).get("vertical_up")
+    middle_z = 0.5 * (sn.x[:, 2].min() + sn.x[:, 2].max()) if model.dim == 3 else 0.0
     runs = []
     for k, exp in enumerate(scene["experiment"]):
         name = str(exp.get("name", f"experiment{k + 1}"))
         place = {"orientation": exp.get("orientation", "parallel"),
-                 "position_mm": tuple(exp.get("position_mm", (0.0, 0.0)))}
+                 "position_mm": tuple(exp.get("position_mm", (0.0, middle_z)))}
         if "approach" in exp:
             place["approach"] = exp["approach"]
         elif "incline_deg" in exp:

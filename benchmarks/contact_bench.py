@@ -1,0 +1,179 @@
+#!/usr/bin/env python
+"""Contact benchmark: time per indentation and in total (setup included), next to the error against
+a full re-solve, for the issue-5 cases; plus the 3D Hertz verification on a large block.
+
+    python benchmarks/contact_bench.py grating                  # (a) 2D cylinder with bone, 150 positions
+    python benchmarks/contact_bench.py steps --model out/monkey # (b) 40 constant-force step positions, 3D
+    python benchmarks/contact_bench.py c5 --model out/human     # (c) C5 to 3 mm in 0.5 mm steps, 3D
+    python benchmarks/contact_bench.py hertz                    # rigid sphere on a 40 mm quarter block
+
+Setup = reading the mesh, assembling and factorising, building the receptor operators (meshing is
+its own cached stage and is not counted). "Full re-solve" = the same indentation solved cold (a new
+contact model: no cached compliance, no warm start) followed by one full FE solve with the contact
+forces, whose displacement field is sampled at the receptors. Reported: max relative difference in
+total force and in receptor strain energy density. Appends a section to
+benchmarks/results/contact_bench.md.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import platform
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from fem.contact import ContactModel, open_model  # noqa: E402
+from fem.indentors import make_indentor  # noqa: E402
+from fem.receptors import ReceptorSampler, receptor_grid  # noqa: E402
+
+RESULTS = Path(__file__).resolve().parent / "results" / "contact_bench.md"
+
+
+def _setup(model_dir, line=None):
+    t = time.perf_counter()
+    model, system, region, info = open_model(model_dir)
+    sn = model.surface_nodes(region)
+    grid = receptor_grid(sn.x, sn.normal, (0.5, 0.75, 1.0), 1.0 if model.dim == 3 else 0.5, line)
+    sampler = ReceptorSampler(model, grid)
+    cm = ContactModel.from_fe(model, system, region, observe=sampler.operator)
+    return model, system, region, sampler, cm, time.perf_counter() - t
+
+
+def _check(model, system, region, sampler, indentor, result, load):
+    """Relative differences (force, receptor SED) of `result` against a cold solve + full field."""
+    cold = ContactModel.from_fe(model, system, region).indent(indentor, **load)
+    u = system.solve(ContactModel.from_fe(model, system, region).compliance(indentor.approach).B @ cold.force_N)
+    sed_full = model.solution(u).sample("sed_MPa", sampler.grid.points_mm)
+    sed = sampler.measures(result.observed, ["sed_MPa"])["sed_MPa"]
+    return (abs(result.total_force_N - cold.total_force_N) / cold.total_force_N,
+            np.abs(sed - sed_full).max() / np.abs(sed_full).max())
+
+
+def _run(name, model_dir, indentor, offsets, load, target_s, checks=5, line=None):
+    model, system, region, sampler, cm, setup_s = _setup(model_dir, line)
+    t = time.perf_counter()
+    results = [cm.sweep(indentor, off[None], **load)[0] for off in offsets]
+    run_s = time.perf_counter() - t
+    picks = np.unique(np.linspace(0, len(offsets) - 1, checks).astype(int))
+    errs = np.array([_check(model, system, region, sampler, indentor.shifted(offsets[i]), results[i], load)
+                     for i in picks])
+    total = setup_s + run_s
+    pen = max(r.kkt["penetration_mm"] for r in results)
+    row = (f"| {name} | {model.ndof} | {len(offsets)} | {setup_s:.2f} | {1e3 * run_s / len(offsets):.1f} | "
+           f"{total:.2f} | {target_s:g} | {'yes' if total < target_s else 'NO'} | {errs[:, 0].max():.1e} | "
+           f"{errs[:, 1].max():.1e} | {pen:.1e} |")
+    print(row, flush=True)
+    return row
+
+
+def case_grating(args):
+    import tempfile
+
+    import pipeline
+
+    folder = Path(args.model) if args.model else Path(tempfile.mkdtemp()) / "cyl8"
+    if not (folder / "mesh.vtu").exists():
+        assert pipeline.main(["mesh", "--preset", "cylinder8", "--bone", "--out", str(folder), "--quiet"]) == 0
+    offsets = np.zeros((150, 3))
+    offsets[:, 0] = -28.6 + 0.2 * np.arange(150)
+    ind = make_indentor("grating:0.5:0.5,0.75,1,1.5,2,3,5,5,5", orientation="parallel")
+    return _run("(a) grating 0.5 mm bars, 1 mm deep, 150 positions, 2D cylinder 8 mm + bone", folder, ind,
+                offsets, {"depth_mm": 1.0}, 5.0)
+
+
+def case_steps(args):
+    offsets = np.zeros((40, 3))
+    offsets[:, 0] = np.linspace(-4.0, 5.75, 40)
+    ind = make_indentor("step:3", orientation="parallel")
+    return _run("(b) step 3 at 0.2 N, 40 positions, 3D monkey", args.model or "out/monkey", ind, offsets,
+                {"force_N": 0.2}, 60.0, checks=3, line=(2, 0.0))
+
+
+def case_c5(args):
+    model, system, region, sampler, cm, setup_s = _setup(args.model or "out/human", (2, 0.0))
+    ind = make_indentor("C5", orientation="perpendicular")
+    t = time.perf_counter()
+    results = cm.indent_depths(ind, [0.5, 1.0, 1.5, 2.0, 2.5, 3.0])
+    run_s = time.perf_counter() - t
+    err = _check(model, system, region, sampler, ind, results[-1], {"depth_mm": 3.0})
+    total = setup_s + run_s
+    row = (f"| (c) C5 perpendicular to 3 mm in 0.5 mm steps, 3D human | {model.ndof} | 6 | {setup_s:.2f} | "
+           f"{1e3 * run_s / 6:.1f} | {total:.2f} | 30 | {'yes' if total < 30 else 'NO'} | {err[0]:.1e} | "
+           f"{err[1]:.1e} | {max(r.kkt['penetration_mm'] for r in results):.1e} |")
+    print(row, flush=True)
+    return row
+
+
+def case_hertz(args):
+    """Rigid sphere R = 5 mm on a quarter block 40 x 40 x 40 mm (graded P2 tets), E = 1 MPa."""
+    from skfem import MeshTet
+
+    from fem.solver import Model
+
+    rows = []
+    for nu in (0.3, 0.49):
+        t = time.perf_counter()
+        xs = _graded(0.1, 1.3, 1.6, 40.0)
+        ys = -_graded(0.1, 0.8, 1.5, 40.0)[::-1]
+        m = MeshTet.init_tensor(xs, ys, xs)
+        p = m.p.T
+        regions = {"top": np.isclose(p[:, 1], 0), "bottom": np.isclose(p[:, 1], ys[0]),
+                   "symx": np.isclose(p[:, 0], 0), "symz": np.isclose(p[:, 2], 0)}
+        model = Model(p, m.t.T, np.ones(m.t.shape[1], int), regions, material=[1.0], nu=nu)
+        system = model.system({"bottom": 0.0, "symx": (0.0, None, None), "symz": (None, None, 0.0)})
+        cm = ContactModel.from_fe(model, system, "top")
+        setup_s = time.perf_counter() - t
+        Es = 1.0 / (1 - nu * nu)
+        for d in (0.05, 0.1, 0.2, 0.3):
+            t = time.perf_counter()
+            r = cm.indent(make_indentor("sphere:5"), depth_mm=d)
+            F, a = 4 / 3 * Es * math.sqrt(5.0) * d ** 1.5, math.sqrt(5.0 * d)
+            p0 = 3 * F / (2 * math.pi * a * a)
+            row = (f"| {nu} | {model.ndof} | {d} | {4 * r.total_force_N / F - 1:+.2%} | "
+                   f"{math.sqrt(4 * r.contact_area_mm2 / math.pi) / a - 1:+.2%} | {r.max_pressure_MPa / p0 - 1:+.2%} | "
+                   f"{r.kkt['penetration_mm']:.1e} | {setup_s:.0f} | {time.perf_counter() - t:.1f} |")
+            print(row, flush=True)
+            rows.append(row)
+    return rows
+
+
+def _graded(fine_mm, fine_len_mm, growth, total_mm):
+    x = list(np.arange(0.0, fine_len_mm + 1e-9, fine_mm))
+    h = fine_mm
+    while x[-1] < total_mm:
+        h *= growth
+        x.append(x[-1] + h)
+    return np.array(x)
+
+
+TIMING_HEADER = ("| case | DOFs | indentations | setup s | ms per indentation | total s | target s | "
+                 "met | force diff | receptor SED diff | max penetration mm |\n|---|---|---|---|---|---|---|---|---|---|---|")
+HERTZ_HEADER = ("| nu | DOFs | depth mm | force err | contact radius err | peak pressure err | penetration mm | "
+                "setup s | solve s |\n|---|---|---|---|---|---|---|---|---|")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("case", choices=["grating", "steps", "c5", "hertz"])
+    ap.add_argument("--model", help="model folder (mesh.vtu, model.json)")
+    args = ap.parse_args()
+    header = HERTZ_HEADER if args.case == "hertz" else TIMING_HEADER
+    print(header)
+    rows = {"grating": case_grating, "steps": case_steps, "c5": case_c5, "hertz": case_hertz}[args.case](args)
+    rows = rows if isinstance(rows, list) else [rows]
+    RESULTS.parent.mkdir(parents=True, exist_ok=True)
+    stamp = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
+    with open(RESULTS, "a") as fh:
+        fh.write(f"\n## {args.case} ({stamp}; {platform.processor() or platform.machine()}, "
+                 f"{os.cpu_count()} cores, OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')})\n\n"
+                 f"{header}\n" + "\n".join(rows) + "\n")
+
+
+if __name__ == "__main__":
+    main()
