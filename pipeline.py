@@ -38,6 +38,7 @@ def _add_reconstruct(sub):
     p.add_argument("--tip-fraction", type=float, default=0.5,
                    help="trim the distal tip where the section is narrower than this fraction "
                         "of the widest section (default 0.5; 0 keeps all)")
+    p.add_argument("--force", action="store_true", help="recompute even if the outputs are current")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
     p.set_defaults(run=_run_reconstruct)
 
@@ -47,8 +48,12 @@ def _run_reconstruct(args):
 
     result = reconstruct_folder(args.images, args.out, spacing_mm=tuple(args.spacing_mm),
                                 tol_mm=args.tol_mm, tip_fraction=args.tip_fraction,
-                                progress=not args.quiet)
-    if not args.quiet:
+                                progress=not args.quiet, force=args.force)
+    if args.quiet:
+        return
+    if result is None:
+        print(f"{args.out}: outputs are current for these images and options (use --force to redo)")
+    else:
         print(result.summary())
 
 

@@ -205,19 +205,48 @@ def sections_document(rec: Reconstruction) -> dict:
     }
 
 
+def input_hash(table: Turntable, options: dict) -> str:
+    """Hash of every input file's bytes and the options: outputs with this hash are current."""
+    import hashlib
+
+    digest = hashlib.sha256(repr(sorted(options.items())).encode())
+    manifest = table.folder / "turntable.toml"
+    for path in [*table.image_paths, table.calibration_path] + ([manifest] if manifest.exists() else []):
+        digest.update(path.name.encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def _current(out_dir: Path, key: str) -> bool:
+    import json
+
+    try:
+        doc = json.loads((out_dir / "sections.json").read_text())
+    except (OSError, ValueError):
+        return False
+    return doc.get("input_hash") == key and all((out_dir / f).exists() for f in ("surface.stl", "report.png"))
+
+
 def reconstruct_folder(images, out_dir, spacing_mm=(0.5, 2.0), tol_mm: float = 0.02,
-                       tip_fraction: float = 0.5, progress: bool = False) -> Reconstruction:
-    """Reconstruct a turntable folder and write sections.json, surface.stl, report.png to out_dir."""
+                       tip_fraction: float = 0.5, progress: bool = False, force: bool = False):
+    """Reconstruct a turntable folder and write sections.json, surface.stl, report.png to out_dir.
+
+    Returns the Reconstruction, or None when out_dir already holds outputs of the same inputs and
+    options (unless force).
+    """
     from reconstruct.report import write_report
 
     table = load_turntable(images)
+    key = input_hash(table, {"spacing_mm": tuple(spacing_mm), "tol_mm": tol_mm, "tip_fraction": tip_fraction})
+    if not force and _current(Path(out_dir), key):
+        return None
     rec = reconstruct(table, spacing_mm, tol_mm, tip_fraction, progress)
     if not rec.surface.is_watertight:
         raise InputError("the lofted surface is not watertight (sections degenerate): "
                          "raise --tip-fraction or check the images")
     t0 = time.perf_counter()
     with staged_output(out_dir) as tmp:
-        write_json(Path(tmp) / "sections.json", sections_document(rec))
+        write_json(Path(tmp) / "sections.json", {**sections_document(rec), "input_hash": key})
         rec.surface.export(Path(tmp) / "surface.stl")
         write_report(rec, Path(tmp) / "report.png")
     rec.timings_s["writing"] = time.perf_counter() - t0

@@ -144,3 +144,12 @@ def test_cli_writes_outputs_and_summary(sets, tmp_path, capsys):
     summary = capsys.readouterr().out
     for word in ("views used", "um/px", "tilt", "sections", "timings"):
         assert word in summary
+    # a second run with the same inputs is skipped; --force or new options recompute
+    stamp = (out / "sections.json").stat().st_mtime_ns
+    assert pipeline.main(["reconstruct", str(sets["plain"]), "--out", str(out)]) == 0
+    assert "current" in capsys.readouterr().out
+    assert (out / "sections.json").stat().st_mtime_ns == stamp
+    assert pipeline.main(["reconstruct", str(sets["plain"]), "--out", str(out), "--force", "--quiet"]) == 0
+    assert (out / "sections.json").stat().st_mtime_ns != stamp
+    assert pipeline.main(["reconstruct", str(sets["plain"]), "--out", str(out), "--tol-mm", "0.05"]) == 0
+    assert "views used" in capsys.readouterr().out
