@@ -119,3 +119,20 @@ def test_cache_returns_the_same_mesh_and_force_is_accepted(built, tmp_path):
     other = model_from_args(None, "monkey", params_for("monkey", bone_offset_mm=0.1))
     assert mesh_key(base, Sizing(size_mm=0.8)) != mesh_key(other, Sizing(size_mm=0.8))
     assert mesh_key(base, Sizing(size_mm=0.8)) != mesh_key(base, Sizing(size_mm=0.7))
+
+
+def test_sizing_field_is_fine_under_the_pad_and_grows_inwards_and_dorsally():
+    from fem.mesh import Sizing, sizing_values
+
+    model = model_from_args(None, "human", params_for("human"))
+    k = len(model.z_mm) // 2
+    c, z = model.centroids[k], model.z_mm[k]
+    r_volar = np.linalg.norm(model.rings[k, 0, 16] - c)                    # ray 16 of 64 points to +y
+    r_dorsal = np.linalg.norm(model.rings[k, 0, 48] - c)
+    pts = np.array([[c[0], c[1] + r_volar - 1.0, z],                        # 1 mm under the pad
+                    [c[0], c[1] + r_volar - 3.5, z],                        # 3.5 mm under the pad
+                    [c[0], c[1] - r_dorsal + 0.3, z]])                      # dorsal skin
+    h = sizing_values(model, Sizing(size_mm=0.5, growth=0.5, coarse_mm=3.0), pts)
+    assert h[0] == pytest.approx(0.5)
+    assert h[1] == pytest.approx(0.5 + 0.5 * (3.5 - 1.5), rel=0.02)        # grows 0.5 mm per mm
+    assert h[2] == pytest.approx(3.0)                                       # capped at coarse
