@@ -63,11 +63,14 @@ def _rotate180(b: Borders, width_px: int) -> Borders:
 
 
 def extract_all(table: Turntable, progress: bool = False) -> list[Borders]:
-    """Borders of every view (two threads: OpenCV and NumPy release the GIL)."""
+    """Borders of every view (two threads: OpenCV and NumPy release the GIL; BLAS is kept to one
+    thread each, its own threads would only compete with ours)."""
+    from threadpoolctl import threadpool_limits
+
     def one(path):
         return extract_borders(table.read(path), name=path.name)
 
-    with ThreadPoolExecutor(max_workers=2) as pool:
+    with ThreadPoolExecutor(max_workers=2) as pool, threadpool_limits(limits=1, user_api="blas"):
         it = pool.map(one, table.image_paths)
         return list(tqdm(it, total=len(table.image_paths), desc="silhouettes", unit="view",
                          disable=not progress))
