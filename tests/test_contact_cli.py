@@ -119,3 +119,22 @@ def test_2d_scenes_run(cyl8, tmp_path, scene):
     else:
         peaks = [float(_rows(tmp_path / scene / f"bar_{w}.csv")[0]["force_N"]) for w in ("0.5", "1.5", "3.0")]
         assert peaks[0] < peaks[1] < peaks[2]                 # wider bar, more force at 1 mm
+
+
+def test_thesis_trend_stiff_skin_spreads_a_line_load(tmp_path):
+    """Thesis 6.2.1 / 7.1.2 on the five-layer 2D cross-section of the human model: under a 2 mm
+    line load the stiff-skin m43338 deflects a wider zone (width where the deflection exceeds half
+    its maximum) than the homogeneous m33338, and needs more force."""
+    out = tmp_path / "hsec"
+    assert pipeline.main(["mesh", "--preset", "human", "--section-z", "10", "--out", str(out), "--quiet"]) == 0
+    width, force = {}, {}
+    for mat in ("m43338", "m33338"):
+        model, system, region, _ = open_model(out, material=mat)
+        cm = ContactModel.from_fe(model, system, region)
+        res = cm.indent(make_indentor("wedge", orientation="parallel", position_mm=(0.6, 0.0)), depth_mm=2.0)
+        x = cm.points_mm[:, 0]
+        wide = x[res.deflection_mm > 0.5 * res.deflection_mm.max()]
+        width[mat], force[mat] = wide.max() - wide.min(), res.total_force_N
+        assert res.kkt["ok"]
+    assert width["m43338"] > 2 * width["m33338"], width
+    assert force["m43338"] > force["m33338"]
