@@ -112,44 +112,29 @@ def case_c5(args):
 
 def case_hertz(args):
     """Rigid sphere R = 5 mm on a quarter block 40 x 40 x 40 mm (graded P2 tets), E = 1 MPa."""
-    from skfem import MeshTet
-
+    from fem.reference import box, fine_then_growing, hertz_sphere
     from fem.solver import Model
 
     rows = []
     for nu in (0.3, 0.49):
         t = time.perf_counter()
-        xs = _graded(0.1, 1.3, 1.6, 40.0)
-        ys = -_graded(0.1, 0.8, 1.5, 40.0)[::-1]
-        m = MeshTet.init_tensor(xs, ys, xs)
-        p = m.p.T
-        regions = {"top": np.isclose(p[:, 1], 0), "bottom": np.isclose(p[:, 1], ys[0]),
-                   "symx": np.isclose(p[:, 0], 0), "symz": np.isclose(p[:, 2], 0)}
-        model = Model(p, m.t.T, np.ones(m.t.shape[1], int), regions, material=[1.0], nu=nu)
+        xs = fine_then_growing(0.1, 1.3, 1.6, 40.0)
+        p, cells, r = box(xs, -fine_then_growing(0.1, 0.8, 1.5, 40.0)[::-1], xs)
+        regions = {"top": r["ymax"], "bottom": r["ymin"], "symx": r["xmin"], "symz": r["zmin"]}
+        model = Model(p, cells, np.ones(len(cells), int), regions, material=[1.0], nu=nu)
         system = model.system({"bottom": 0.0, "symx": (0.0, None, None), "symz": (None, None, 0.0)})
         cm = ContactModel.from_fe(model, system, "top")
         setup_s = time.perf_counter() - t
-        Es = 1.0 / (1 - nu * nu)
         for d in (0.05, 0.1, 0.2, 0.3):
             t = time.perf_counter()
             r = cm.indent(make_indentor("sphere:5"), depth_mm=d)
-            F, a = 4 / 3 * Es * math.sqrt(5.0) * d ** 1.5, math.sqrt(5.0 * d)
-            p0 = 3 * F / (2 * math.pi * a * a)
+            F, a, p0 = hertz_sphere(5.0, d, 1.0, nu)
             row = (f"| {nu} | {model.ndof} | {d} | {4 * r.total_force_N / F - 1:+.2%} | "
                    f"{math.sqrt(4 * r.contact_area_mm2 / math.pi) / a - 1:+.2%} | {r.max_pressure_MPa / p0 - 1:+.2%} | "
                    f"{r.kkt['penetration_mm']:.1e} | {setup_s:.0f} | {time.perf_counter() - t:.1f} |")
             print(row, flush=True)
             rows.append(row)
     return rows
-
-
-def _graded(fine_mm, fine_len_mm, growth, total_mm):
-    x = list(np.arange(0.0, fine_len_mm + 1e-9, fine_mm))
-    h = fine_mm
-    while x[-1] < total_mm:
-        h *= growth
-        x.append(x[-1] + h)
-    return np.array(x)
 
 
 TIMING_HEADER = ("| case | DOFs | indentations | setup s | ms per indentation | total s | target s | "

@@ -219,3 +219,29 @@ def half_disc(r0, R, n_rad, n_arc, ratio=1.0):
     surface = np.isclose(y, 0.0)
     return pts, cells, {"surface": surface, "far": np.isclose(np.hypot(x, y), R),
                         "patch": surface & (np.abs(x) <= r0 * (1 + 1e-9))}
+
+
+# --------------------------------------------------------------------------- contact (Hertz; Johnson 1985)
+def hertz_sphere(radius_mm, depth_mm, E_MPa, nu):
+    """Rigid sphere on an elastic half-space: (force N, contact radius mm, peak pressure MPa)."""
+    Es = E_MPa / (1 - nu * nu)
+    a = np.sqrt(radius_mm * depth_mm)
+    force = 4.0 / 3.0 * Es * np.sqrt(radius_mm) * depth_mm ** 1.5
+    return force, a, 3 * force / (2 * np.pi * a * a)
+
+
+def hertz_cylinder(radius_mm, force_N_per_mm, E_MPa, nu):
+    """Rigid cylinder on an elastic half-plane (plane strain): (half-width mm, peak pressure MPa)."""
+    Es = E_MPa / (1 - nu * nu)
+    b = np.sqrt(4 * force_N_per_mm * radius_mm / (np.pi * Es))
+    return b, 2 * force_N_per_mm / (np.pi * b)
+
+
+def fine_then_growing(fine_mm, fine_len_mm, growth, total_mm):
+    """Grid 0..>=total_mm: cells of fine_mm up to fine_len_mm, then each `growth` times the last."""
+    x = list(np.arange(0.0, fine_len_mm + 1e-9, fine_mm))
+    h = fine_mm
+    while x[-1] < total_mm:
+        h *= growth
+        x.append(x[-1] + h)
+    return np.array(x)

@@ -8,23 +8,8 @@ import scipy.optimize as so
 
 from fem import contact
 from fem.indentors import make_indentor
+from fem.reference import hertz_sphere
 from reconstruct.errors import InputError
-
-
-# --------------------------------------------------------------------------- Hertz (Johnson 1985)
-def hertz_sphere(radius_mm, depth_mm, E_MPa, nu):
-    """Rigid sphere on an elastic half-space: (force N, contact radius mm, max pressure MPa)."""
-    Es = E_MPa / (1 - nu * nu)
-    a = math.sqrt(radius_mm * depth_mm)
-    force = 4.0 / 3.0 * Es * math.sqrt(radius_mm) * depth_mm ** 1.5
-    return force, a, 3 * force / (2 * math.pi * a * a)
-
-
-def hertz_cylinder(radius_mm, force_N_per_mm, E_MPa, nu):
-    """Rigid cylinder on an elastic half-plane (plane strain): (half-width mm, max pressure MPa)."""
-    Es = E_MPa / (1 - nu * nu)
-    b = math.sqrt(4 * force_N_per_mm * radius_mm / (math.pi * Es))
-    return b, 2 * force_N_per_mm / (math.pi * b)
 
 
 # --------------------------------------------------------------------------- half-space compliance
