@@ -179,7 +179,8 @@ def _add_indent(sub):
     p.add_argument("--nu", type=float, help="Poisson ratio (default: the model's)")
     p.add_argument("--receptor-depths", default="0.5,0.75,1.0", help="receptor depths in mm (default 0.5,0.75,1.0)")
     p.add_argument("--receptor-spacing", type=float, default=1.0, help="receptor spacing in mm (default 1)")
-    p.add_argument("--line", help="receptors only along a line: z=<mm> or x=<mm> (default: the whole pad)")
+    p.add_argument("--line", help="receptors only along a line: z=<mm>, z=middle or x=<mm> (default: the "
+                                  "whole pad)")
     p.add_argument("--pvd", action=argparse.BooleanOptionalAction, default=None,
                    help="full fields per indentation as a PVD series (default: on up to 20 indentations)")
     p.add_argument("--out", help="output folder (default: <model>/indent_<indentor>)")
@@ -214,7 +215,7 @@ def _run_indent(args):
                                                     "spacing_mm": args.receptor_spacing}}
         if args.line:
             axis, _, value = args.line.partition("=")
-            scene["receptors"]["line"] = [axis, float(value)]
+            scene["receptors"]["line"] = [axis, value]
         name = exp["name"]
     for key in ("material", "nu"):
         if getattr(args, key) is not None:

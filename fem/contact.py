@@ -537,7 +537,14 @@ def run_scene(model_dir, out_dir, scene: dict, progress: bool = True) -> str:
     rc = scene.get("receptors", {})
     line = rc.get("line")
     if line is not None:
-        line = ({"x": 0, "y": 1, "z": 2}[line[0]], float(line[1]))
+        axis = {"x": 0, "y": 1, "z": 2}.get(str(line[0]))
+        try:
+            value = 0.5 * (sn.x[:, axis].min() + sn.x[:, axis].max()) if line[1] == "middle" else float(line[1])
+        except (ValueError, TypeError, IndexError):
+            axis = None
+        if axis is None or axis >= model.dim:
+            raise InputError(f"bad receptor line {line}: use z=<mm> or z=middle (3D), x=<mm>")
+        line = (axis, value)
     grid = receptor_grid(sn.x, sn.normal, parse_values(rc.get("depths_mm", list(DEFAULT_DEPTHS_MM))),
                          float(rc.get("spacing_mm", 1.0)), line)
     sampler = ReceptorSampler(model, grid)

@@ -138,3 +138,10 @@ def test_thesis_trend_stiff_skin_spreads_a_line_load(tmp_path):
         assert res.kkt["ok"]
     assert width["m43338"] > 2 * width["m33338"], width
     assert force["m43338"] > force["m33338"]
+
+
+def test_bad_receptor_line(cyl8, tmp_path, capsys):
+    out = tmp_path / "bad"
+    assert pipeline.main(["indent", str(cyl8), "--indentor", "C5", "--depth", "1", "--line", "z=abc",
+                          "--out", str(out), "--quiet"]) == 2
+    assert "receptor line" in capsys.readouterr().err and not out.exists()
