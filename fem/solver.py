@@ -15,10 +15,10 @@ p = D^-1 B u (B_i u = int q_i div u) and theta_bar = p / kappa the assumed volum
 In plane strain eps_zz = 0 and sigma_zz = lambda theta_bar. As nu -> 0.5 this tends to the
 inf-sup stable Taylor-Hood constraint B u = 0, so it does not lock; it is symmetric positive
 definite. Measured on the Lame sphere at nu = 0.4999 (9k DOFs): displacement 0.3 %, mean stress
-1.6 % max error. Two rejected alternatives, measured on the same tests: plain P2 locks (50 %
-stress error) and P2 with an element-constant condensed pressure (P2-P0) gives accurate
-displacements but a mean stress that does not converge in 3D (24 % rms at nu = 0.4999).
-The condensed K is ~7x denser than its factors, so K is kept as an operator and the sparse
+1.6 % max error. Rejected: plain P2 (locks: 50 % stress error at nu = 0.4999, DESIGN.md) and P2
+with an element-constant condensed pressure (P2-P0), which gave accurate displacements but a mean
+stress that did not converge in 3D (24 % rms on the same sphere at nu = 0.4999, measured).
+The condensed K has ~7x the non-zeros of K_dev, so K is kept as an operator and the sparse
 quasi-definite matrix [[K_dev, B^T], [B, -D]] is factorised (MKL PARDISO LDL^T via pypardiso;
 SciPy SuperLU fallback, slow, with a warning) and re-solved for new right-hand sides. Strain,
 stress and every measure are the element's own fields, evaluated in the element that holds
