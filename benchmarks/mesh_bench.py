@@ -68,9 +68,16 @@ def main(argv=None):
         rows.append(row)
         prev = (size, row["cpu s"] / 2)          # what it would take on 2 idle cores
         print("  ".join(f"{k}={fmt(row[k])}" for k in COLUMNS), flush=True)
+        write_markdown(args.preset, rows, skipped, load0)
+    write_markdown(args.preset, rows, skipped, load0)
+    print((HERE / "results" / "mesh_bench.md").read_text())
+
+
+def write_markdown(preset, rows, skipped, load0):
+    """Write benchmarks/results/mesh_bench.md (called after every size, so a killed run keeps its rows)."""
     head = "| " + " | ".join(COLUMNS) + " |\n|" + "---|" * len(COLUMNS) + "\n"
     body = "".join("| " + " | ".join(fmt(r[k]) for k in COLUMNS) + " |\n" for r in rows)
-    text = (f"# Mesh benchmark ({args.preset} preset)\n\n"
+    text = (f"# Mesh benchmark ({preset} preset)\n\n"
             f"pytetwild with the default sizing (coarse 3 mm, growth 0.5, fine zone 1.5 mm deep, envelope "
             f"0.02 mm, 20 optimisation passes), {os.cpu_count()} cores, load average {load0:.1f} at the start "
             f"(the machine is shared: wall s is under that load; cpu s counts all threads, and 2 idle cores "
@@ -80,7 +87,6 @@ def main(argv=None):
     out = HERE / "results" / "mesh_bench.md"
     out.parent.mkdir(exist_ok=True)
     out.write_text(text)
-    print(text)
 
 
 if __name__ == "__main__":
