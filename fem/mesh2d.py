@@ -168,7 +168,7 @@ def target_size(domain: Domain2D, sizing: Sizing2D, q: np.ndarray) -> np.ndarray
 
         outer = _resample(domain.curves[0], sizing.size_mm)
         zone = outer[domain.surface(outer)]
-        dist[far] = cKDTree(zone).query(q[far])[0] + 0.0
+        dist[far] = cKDTree(zone).query(q[far])[0]
     return np.minimum(sizing.size_mm + sizing.growth * dist, sizing.coarse_mm)
 
 
@@ -196,7 +196,7 @@ def _sample_curve(poly: np.ndarray, h_at, cap: float) -> np.ndarray:
     if len(corners):
         from scipy.spatial import cKDTree
 
-        d, j = cKDTree(pts).query(corners)
+        _, j = cKDTree(pts).query(corners)
         pts[j] = corners                                     # snap the nearest sample to each corner
     return pts
 
@@ -215,7 +215,8 @@ def mesh_domain(domain: Domain2D, sizing: Sizing2D):
 
     sizing.check()
     caps = _layer_caps(domain)
-    caps[-1] = min(caps[-1], caps[-1] / 4 if len(domain.curves) > 1 else caps[-1])  # inner disc: interior points
+    if len(domain.curves) > 1:
+        caps[-1] /= 4                  # innermost disc (bone): keep interior points, no slivers
     h0 = sizing.size_mm
     # curves first: samples at the local size, capped by the adjacent layers' thinnest part
     samples, spacing = [], []
