@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import pipeline
-from fem.mesh2d import Sizing2D, mesh_domain, preset_domain, section_domain
+from fem.mesh2d import Sizing2D, mesh_domain, section_domain
 
 
 def read(out):
