@@ -76,19 +76,18 @@ def support_curve(coef: np.ndarray, n_points: int = N_POINTS) -> np.ndarray:
 
 
 def convex_section(curve: np.ndarray) -> np.ndarray:
-    """The curve itself if it is convex, else its convex hull resampled to the same point count.
+    """The curve itself if it is convex (every point a hull vertex, in order), else its convex
+    hull resampled by arc length to the same point count.
 
     A support function fitted to noisy data can have a slightly negative radius of curvature in
     places; the envelope curve then forms a tiny swallowtail, which the hull removes.
     """
-    hull = ConvexHull(curve)
-    if len(hull.vertices) == len(curve):
+    v = ConvexHull(curve).vertices                    # CCW
+    if len(v) == len(curve) and np.all(np.diff(np.roll(v, -int(np.argmin(v)))) == 1):
         return curve
-    poly = curve[hull.vertices]                       # CCW
-    seg = np.linalg.norm(np.diff(np.vstack([poly, poly[:1]]), axis=0), axis=1)
-    arc = np.concatenate([[0.0], np.cumsum(seg)])
+    closed = np.vstack([curve[v], curve[v[:1]]])
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(closed, axis=0), axis=1))])
     t = np.linspace(0.0, arc[-1], len(curve), endpoint=False)
-    closed = np.vstack([poly, poly[:1]])
     return np.column_stack([np.interp(t, arc, closed[:, 0]), np.interp(t, arc, closed[:, 1])])
 
 

@@ -63,6 +63,13 @@ def test_convex_shapes_meet_accuracy_targets(sets, name):
     dz = np.diff(rec.z_mm)
     assert dz.min() >= 0.5 - 1e-9 and dz.max() <= 2.0 + 1e-9
     assert len(doc["sections"]) >= 5
+    for sec in doc["sections"]:                     # simple, convex, CCW polygons
+        p = np.array(sec["points"])
+        edge = np.roll(p, -1, axis=0) - p
+        turn = edge[:, 0] * np.roll(edge, -1, axis=0)[:, 1] - edge[:, 1] * np.roll(edge, -1, axis=0)[:, 0]
+        assert (turn > -1e-5).all()                  # never turns clockwise (points rounded to 1e-5 mm)
+        heading = np.unwrap(np.arctan2(edge[:, 1], edge[:, 0]))
+        assert heading[-1] - heading[0] < 2 * np.pi  # turns once round: no loop
 
 
 def test_axis_offset_tilt_and_aspect_are_recovered(sets):
