@@ -30,9 +30,15 @@ deflection (Hertz within 3 %, tests/test_contact_fe.py) but nodal forces alterna
 and midside nodes (about 1 : 2 against a consistent load), so raw f_i / A_i overstates the peak
 pressure by about a third: hence the facet-averaged pressure.
 
-    model = ContactModel.from_solver(solve, n_dofs, points_mm, dofs, areas_mm2, observe=O)
-    res = model.indent(indentor, depth_mm=1.0)          # or force_N=0.2, equal_force=True
-    res.total_force_N, res.contact_area_mm2, res.kkt, res.observed
+    model, system, region, info = open_model("out/cyl8")          # fem.solver Model, factorised
+    cm = ContactModel.from_fe(model, system, region, observe=model.strain_operator(points))
+    res = cm.indent(indentor, depth_mm=1.0)             # or force_N=0.2, equal_force=True
+    res.total_force_N, res.contact_area_mm2, res.max_pressure_MPa, res.kkt, res.observed
+    cm.sweep(indentor, offsets_mm, force_N=0.2)         # one small LCP per position
+    run_scene("out/cyl8", "out/cyl8/indent_x", load_scene("scenes/bars.toml"))   # files
+
+Any other elastic body works through `ContactModel(points, areas, compliance_for)` with a
+`Compliance` (e.g. `MatrixCompliance` for an analytic half-space).
 """
 from __future__ import annotations
 
