@@ -150,3 +150,16 @@ def test_bad_requests():
         model.indent(make_indentor("sphere:1"), depth_mm=0.1, force_N=1.0)
     with pytest.raises(InputError):
         model.indent(make_indentor("sphere:1"), depth_mm=-0.1)
+
+
+def test_matrix_compliance_and_observation():
+    """A dense compliance with observation rows = the compliance itself: the observed response is
+    the deflection of every node, and results equal those of the lazily built model."""
+    lazy, hs = half_space_model(1.0, 0.1)
+    C = hs.columns(np.arange(len(hs.xz)))
+    dense = contact.ContactModel(lazy.points_mm, lazy.areas_mm2, lambda a: contact.MatrixCompliance(C, C))
+    ind = make_indentor("sphere:2")
+    a, b = lazy.indent(ind, depth_mm=0.05), dense.indent(ind, depth_mm=0.05)
+    np.testing.assert_allclose(b.force_N, a.force_N, atol=1e-12)
+    np.testing.assert_allclose(b.observed, b.deflection_mm, atol=1e-12)
+    assert b.active.sum() > 10
