@@ -39,14 +39,12 @@ RECTANGULAR_MM = {"R1": 12.7, "R2": 38.1}
 STEP_HALF_WAVELENGTH_MM = (0.0, 0.450, 1.195, 1.230, 3.038, 3.134)
 """Half-wavelengths in mm of the sinusoidal ramp of steps 0-5 (Srinivasan and LaMotte 1987)."""
 STEP_HEIGHT_MM = 0.5
-BAR_WIDTHS_MM = (0.5, 1.5, 3.0)
 DEFAULT_GRATING_GAPS_MM = (0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 5.0)
 """Default gap list of an aperiodic grating (equal bars, growing gaps); pass your own list."""
 CONE_BASE_RADIUS_MM, CONE_HEIGHT_MM = 3.175, 2.4
 PUNCH_DIAMETER_MM = 6.35
 PLATE_SIZE_MM = 20.0
 WEDGE_HALF_ANGLE_DEG = 15.0
-INCLINED_FINGER_DEG = 30.0
 
 
 # --------------------------------------------------------------------------- shapes
