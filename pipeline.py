@@ -86,12 +86,12 @@ def _add_render(sub):
 def _run_render(args):
     from reconstruct.synthetic import render_turntable, make_shape
 
-    shape = make_shape(args.shape, groove=args.groove)
+    shape = make_shape(args.shape, groove=args.groove, rod=not args.no_rod)
     info = render_turntable(shape, args.out, n_views=args.views, span_deg=args.span_deg,
                             size_px=tuple(args.size), mm_per_px=args.mm_per_px, aspect=args.aspect,
                             blur_px=args.blur_px, noise=args.noise, vignetting=args.vignetting,
                             axis_offset_px=args.axis_offset_px, tilt_deg=args.tilt_deg,
-                            rod=not args.no_rod, seed=args.seed, progress=not args.quiet)
+                            seed=args.seed, progress=not args.quiet)
     if not args.quiet:
         print(f"rendered {info['views']} views of '{args.shape}' to {args.out} "
               f"({info['size_px'][0]} x {info['size_px'][1]} px, {info['mm_per_px']} mm/px); "

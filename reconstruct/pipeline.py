@@ -89,7 +89,7 @@ def _trim(s: np.ndarray, width: np.ndarray, rod: bool, tip_fraction: float, ds: 
     s, width = s[a:b], width[a:b]
     trims = {}
     if a > 0 or b < len(valid):
-        trims["frame/partial rows"] = f"kept s {s[0]:.2f} .. {s[-1]:.2f} mm"
+        trims["seen whole in every view"] = f"s {s[0]:.2f} .. {s[-1]:.2f} mm along the axis"
     w_max = width.max()
     lo = 0
     if rod:

@@ -218,8 +218,7 @@ def _photograph(coverage, cam, blur_px, noise, vignetting, rng):
 def render_turntable(shape: Shape, out_dir, n_views: int = 100, span_deg: float = 360.0,
                      size_px=(700, 900), mm_per_px: float = 0.04, aspect: float = 1.0,
                      blur_px: float = 0.8, noise: float = 2.0, vignetting: float = 0.25,
-                     axis_offset_px: float = 0.0, tilt_deg: float = 0.0, rod: bool = True,
-                     seed: int = 0, template_diameter_mm: float = 12.7, progress: bool = False,
+                     axis_offset_px: float = 0.0, tilt_deg: float = 0.0, seed: int = 0, template_diameter_mm: float = 12.7, progress: bool = False,
                      image_format: str = "png") -> dict:
     """Render a turntable folder: `view_XXX.XXdeg.png` images, `calibration.png` (a dark disc of
     `template_diameter_mm` on its shaft), `turntable.toml`, and `truth.json`.
@@ -232,8 +231,6 @@ def render_turntable(shape: Shape, out_dir, n_views: int = 100, span_deg: float 
     rng = np.random.default_rng(seed)
     cam = _Camera(size_px, mm_per_px, aspect, axis_offset_px, tilt_deg)
     z0_s = 2.5 - shape.z_range_mm[0]            # the body starts 2.5 mm above the bottom edge
-    if not rod:
-        shape.rod_radius_mm = 0.0
     s_grid = np.arange(-2.0, cam.s.max() + 2.0, min(mm_per_px, mm_per_px * aspect) / 4)
     thetas = np.arange(n_views) * span_deg / n_views
     n_dirs = np.column_stack([-np.cos(np.deg2rad(thetas)), np.sin(np.deg2rad(thetas))])
