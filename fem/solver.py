@@ -711,18 +711,24 @@ class Solution:
         return 0.5 * float(self.u @ self.nodal_forces)
 
     def _state(self, x, cells):
+        """State at points x (n, dim) in `cells`: the same fields as the operators, evaluated
+        directly from the element DOFs (no sparse matrices: fast for all element centroids)."""
         from fem.measures import State
 
         m, d, n = self.model, self.model.dim, len(x)
+        value, grad = m._shape(x, cells)                                  # (nb, d, n), (nb, d, d, n)
+        ue = self.u[m.basis.element_dofs[:, cells]]                       # (nb, n)
         disp = np.zeros((n, 3))
-        disp[:, :d] = (m._operator(x, cells, "displacement") @ self.u).reshape(n, d)
-        comps = (m._operator(x, cells, "strain") @ self.u).reshape(n, -1)
+        disp[:, :d] = np.einsum("kin,kn->ni", value, ue)
+        g = np.einsum("kijn,kn->nij", grad, ue)
+        eps = 0.5 * (g + g.transpose(0, 2, 1))
+        X = m._reference(x, cells)
+        p1 = np.vstack([1.0 - X.sum(axis=0), X])                          # P1 pressure shape values
+        theta_bar = (p1 * (m._pressure @ self.u)[m._pbasis.element_dofs[:, cells]]).sum(axis=0) / m._kappa[cells]
+        eps += ((theta_bar - np.trace(eps, axis1=1, axis2=2)) / d)[:, None, None] * np.eye(d)
         strain = np.zeros((n, 3, 3))
-        for c, name in enumerate(STRAIN_COMPONENTS[d]):
-            i, j = _INDEX[name[0]], _INDEX[name[1]]
-            strain[:, i, j] = strain[:, j, i] = comps[:, c]
-        tr = np.trace(strain, axis1=1, axis2=2)
-        stress = 2 * m.mu[cells, None, None] * strain + (m.lam[cells] * tr)[:, None, None] * np.eye(3)
+        strain[:, :d, :d] = eps
+        stress = 2 * m.mu[cells, None, None] * strain + (m.lam[cells] * theta_bar)[:, None, None] * np.eye(3)
         return State(disp, strain, stress)
 
     def fields(self, points, names=None, layer=None) -> dict[str, np.ndarray]:
