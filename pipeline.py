@@ -228,8 +228,112 @@ def _run_indent(args):
         print(summary)
 
 
+# --------------------------------------------------------------------------- biomechanical verification
+def _biomech_common(p, indentor_help):
+    p.add_argument("model", help="model folder with mesh.vtu (+ model.json) from `pipeline.py mesh`")
+    p.add_argument("--indentor", default="wedge", help=indentor_help)
+    p.add_argument("--axis", "--orientation", dest="orientation",
+                   help="indentor length axis (default: parallel in 2D, perpendicular to the finger in 3D)")
+    p.add_argument("--position", type=float, nargs=2, metavar=("X", "Z"),
+                   help="load position on the pad in mm (default: the middle of the pad)")
+    p.add_argument("--nu", type=float, help="Poisson ratio (default: the model's)")
+    p.add_argument("--side", default="mean", choices=("mean", "positive", "negative"),
+                   help="profile side of the load: mean of both (default), or one side")
+    p.add_argument("--quiet", action="store_true", help="no summary")
+
+
+def _add_study_layers(sub):
+    p = sub.add_parser("study-layers", help="layer-stiffness study (thesis fig. 6-10): deflection profiles under "
+                                            "a line load with each layer's modulus varied by powers of ten")
+    _biomech_common(p, "indentor code (default wedge, the line load)")
+    p.add_argument("--base", help="base material code mABCDE (default: the model's, e.g. m43338)")
+    p.add_argument("--layers", default="1,2,3,4", help="layers to vary (default 1,2,3,4)")
+    p.add_argument("--offsets", default="-1,0,1", help="digit offsets, i.e. powers of ten (default -1,0,1)")
+    p.add_argument("--depth", default="2.0", help="depth(s) in mm: value, list or start:stop:step (default 2.0)")
+    p.add_argument("--deflection", help="measured profiles to plot alongside: CSV distance_mm, deflection_mm, "
+                                        "depth_mm")
+    p.add_argument("--out", help="output folder (default: <model>/study_layers)")
+    p.set_defaults(run=_run_study_layers)
+
+
+def _run_study_layers(args):
+    from fem.biomech import run_study_layers
+
+    text = run_study_layers(args.model, args.out or str(Path(args.model) / "study_layers"), base=args.base,
+                            layers=args.layers, offsets=args.offsets, depths=args.depth, indentor=args.indentor,
+                            orientation=args.orientation, position_mm=args.position, nu=args.nu,
+                            side=args.side, data_csv=args.deflection)
+    if not args.quiet:
+        print(text)
+
+
+def _add_fit_material(sub):
+    p = sub.add_parser("fit-material", help="fit layer moduli to measured deflection profiles (ratios) and "
+                                            "force-depth data (absolute scale)")
+    _biomech_common(p, "indentor of the deflection data (default wedge)")
+    p.add_argument("--deflection", help="CSV distance_mm, deflection_mm, depth_mm (one or more depths)")
+    p.add_argument("--force", help="CSV depth_mm, force_N (N/mm for 2D models): fits the common modulus scale")
+    p.add_argument("--force-indentor", default="plate", help="indentor of the force data (default plate)")
+    p.add_argument("--keep-ratios", action="store_true",
+                   help="scale the --material ratios to the forces instead of the deflection fit's")
+    p.add_argument("--match", default="least-squares", choices=("least-squares", "deepest"),
+                   help="force scale by least squares over all depths, or equal at the deepest (thesis)")
+    p.add_argument("--material", dest="base", help="base / start material code (default: the model's)")
+    p.add_argument("--free-layers", default="2,3,4",
+                   help="layers whose moduli are fitted (default 2,3,4; the others stay at the base)")
+    p.add_argument("--bounds", type=float, nargs=2, default=(1.0, 7.0), metavar=("LO", "HI"),
+                   help="bounds on log10 modulus in Pa (default 1 7)")
+    p.add_argument("--noise", type=float, help="measurement noise in mm (default: from the residuals)")
+    p.add_argument("--out", help="output folder (default: <model>/fit_material)")
+    p.set_defaults(run=_run_fit_material)
+
+
+def _run_fit_material(args):
+    from fem.biomech import run_fit_material
+
+    text = run_fit_material(args.model, args.out or str(Path(args.model) / "fit_material"),
+                            deflection_csv=args.deflection, force_csv=args.force, keep_ratios=args.keep_ratios,
+                            base=args.base, free_layers=args.free_layers, bounds=tuple(args.bounds),
+                            indentor=args.indentor, orientation=args.orientation, position_mm=args.position,
+                            force_indentor=args.force_indentor, match=args.match, nu=args.nu, side=args.side,
+                            noise_mm=args.noise)
+    if not args.quiet:
+        print(text)
+
+
+# --------------------------------------------------------------------------- analyze
+def _add_analyze(sub):
+    p = sub.add_parser("analyze", help="fit the linear receptor model d = a S + b to recorded rates: "
+                                       "ranked candidate table, profile and scatter plots")
+    p.add_argument("results", nargs="+", help="indentation results folder(s) from `pipeline.py indent`; two "
+                                              "2D runs of different model diameters make the diameter free")
+    p.add_argument("--neural", required=True, help="neural CSV: stimulus,position_mm,rate_ips[,unit,orientation]")
+    p.add_argument("--diameters", type=float, nargs=2, metavar=("D1", "D2"),
+                   help="model diameters of the two runs in mm (default: from each run's ../model.json)")
+    p.add_argument("--measures", help="comma-separated candidates: fem.measures names or abs:<name> "
+                                      "(default: the thesis candidates the runs computed)")
+    p.add_argument("--fit-on", help="comma-separated stimuli to fit on; the others are predicted with "
+                                    "the same a, b, depth (default: fit all together)")
+    p.add_argument("--orientation", help="use only rows with this bar orientation")
+    p.add_argument("--receptor-x", type=float, default=0.0, help="lateral receptor position in mm (default 0: "
+                                                                  "the central receptor)")
+    p.add_argument("--out", help="output folder (default: <first results folder>/analysis)")
+    p.add_argument("--quiet", action="store_true", help="no summary")
+    p.set_defaults(run=_run_analyze)
+
+
+def _run_analyze(args):
+    from fem.analysis import run_analyze
+
+    text = run_analyze(args.results, args.neural, out_dir=args.out, diameters_mm=args.diameters,
+                       measures=args.measures, fit_on=args.fit_on, orientation=args.orientation,
+                       receptor_x_mm=args.receptor_x)
+    if not args.quiet:
+        print(text)
+
+
 # --------------------------------------------------------------------------- main
-COMMANDS = [_add_reconstruct, _add_render, _add_mesh, _add_indent]
+COMMANDS = [_add_reconstruct, _add_render, _add_mesh, _add_indent, _add_study_layers, _add_fit_material, _add_analyze]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -245,3 +245,24 @@ def fine_then_growing(fine_mm, fine_len_mm, growth, total_mm):
         h *= growth
         x.append(x[-1] + h)
     return np.array(x)
+
+
+# --------------------------------------------------------------------------- line-load deflection (thesis 6.2.1)
+WATERBED_PER_BEAM = 8.0 / 3.0
+"""Lw / Lb at which the waterbed and beam profiles agree to first order near the load (thesis 6.2.1)."""
+
+
+def waterbed_deflection(x_mm, d0_mm, Lw_mm):
+    """Waterbed model (Srinivasan 1989, thesis eq. 6.1): a membrane enclosing an incompressible
+    fluid, line load at x = 0: delta = d0 [3 (x/Lw)^2 - 4 (x/Lw) + 1] for 0 <= |x| <= Lw, 0 beyond
+    (the membrane's attachment). Deflection positive into the finger [mm]; it crosses zero at
+    Lw/3 and bulges out (negative) on Lw/3 < |x| < Lw."""
+    s = np.abs(np.asarray(x_mm, dtype=float)) / Lw_mm
+    return np.where(s <= 1.0, d0_mm * (3 * s**2 - 4 * s + 1), 0.0)
+
+
+def beam_deflection(x_mm, d0_mm, Lb_mm):
+    """Cantilever beam of length Lb clamped at Lb, its free end (the load, x = 0) displaced d0
+    (thesis eq. 6.2): delta = d0 [0.5 (x/Lb)^3 - 1.5 (x/Lb) + 1] for |x| <= Lb, 0 beyond [mm]."""
+    s = np.abs(np.asarray(x_mm, dtype=float)) / Lb_mm
+    return np.where(s <= 1.0, d0_mm * (0.5 * s**3 - 1.5 * s + 1), 0.0)
