@@ -403,8 +403,8 @@ class Model:
         """(ndof, ndof) deviatoric stiffness int 2 mu dev eps(u) : dev eps(v) [N/mm].
 
         Vectorised over elements (skfem's generic assembly is ~5x slower for this form): with
-        M[a,i,b,j] = int dN_a/dx_i dN_b/dx_j, k[ai,bj] = 2 mu (d_ij sum_k M[akbk] / 2
-        + M[ajbi] / 2 - M[aibj] / d)."""
+        M[a,i,b,j] = int 2 mu dN_a/dx_i dN_b/dx_j, k[ai,bj] = d_ij sum_k M[akbk] / 2 + M[ajbi] / 2
+        - M[aibj] / d."""
         d = self.dim
         scalar = Basis(self.mesh, ElementTetP2() if d == 3 else ElementTriP2(), intorder=2)
         G = np.array([scalar.basis[a][0].grad for a in range(scalar.Nbfun)])      # (nb, d, M, nqp)
@@ -412,11 +412,11 @@ class Model:
         rows, cols, vals = [], [], []
         for chunk in np.array_split(np.arange(M), max(1, M // 20000)):
             g = G[:, :, chunk]
-            m = np.einsum("eq,aieq,bjeq->eaibj", scalar.dx[chunk], g, g)
+            m = np.einsum("eq,aieq,bjeq->eaibj", 2 * self.mu[chunk, None] * scalar.dx[chunk], g, g)
             tr = np.einsum("eakbk->eab", m)
             k = (0.5 * tr[:, :, None, :, None] * np.eye(d)[None, None, :, None, :]
-                 + 0.5 * m.transpose(0, 1, 4, 3, 2) - m / d) * (2 * self.mu[chunk, None, None, None, None])
-            dofs = self.basis.element_dofs[:, chunk].T                               # (e, nb * d)
+                 + 0.5 * m.transpose(0, 1, 4, 3, 2) - m / d)
+            dofs = self.basis.element_dofs[:, chunk].T.astype(np.int32)               # (e, nb * d)
             rows.append(np.repeat(dofs, nb * d, axis=1).ravel())
             cols.append(np.tile(dofs, (1, nb * d)).ravel())
             vals.append(k.reshape(len(chunk), -1))
