@@ -59,6 +59,7 @@ from __future__ import annotations
 import warnings
 from dataclasses import dataclass
 from functools import cached_property
+from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
@@ -761,4 +762,4 @@ class Solution:
 
         write_vtu(path, self)
         if points is not None:
-            write_csv(str(path).rsplit(".", 1)[0] + ".csv", points, self.fields(points, names, layer))
+            write_csv(Path(path).with_suffix(".csv"), points, self.fields(points, names, layer))
