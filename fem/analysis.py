@@ -39,7 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fem.measures import MEASURES, check_names
+from fem.measures import MEASURES
 from fem.neural import NeuralData
 from reconstruct.errors import InputError
 
@@ -416,17 +416,15 @@ class ReceptiveField:
     hole_mm: float
 
     def map2d(self, n: int = 161):
-        """Axisymmetric map (the thesis's rotation of the profile): (x (n,), y (n,), on (n, n))."""
+        """Axisymmetric map (the thesis's rotation of the profile about the receptor): (x (n,),
+        y (n,), on (n, n)); at each radius the larger of the two sides of the profile."""
         r_max = np.abs(self.positions_mm).max()
         x = np.linspace(-r_max, r_max, n)
         r = np.hypot(*np.meshgrid(x, x))
-        pos = np.abs(self.positions_mm)
-        order = np.argsort(pos)
-        # the profile side with the larger response at each radius is taken (symmetric for a centred receptor)
-        v = np.maximum(np.interp(r, pos[order], np.where(self.positions_mm >= 0, self.values, -np.inf)[order],
-                                 left=np.nan, right=np.nan),
-                       np.interp(r, pos[order], np.where(self.positions_mm <= 0, self.values, -np.inf)[order]))
-        return x, x, v >= self.threshold
+        p, v = self.positions_mm, self.values
+        side = np.fmax(np.interp(r, p, v, left=np.nan, right=np.nan), np.interp(-r, p, v, left=np.nan, right=np.nan))
+        with np.errstate(invalid="ignore"):
+            return x, x, side >= self.threshold
 
 
 def _crossing(p0, p1, v0, v1, thr):
@@ -559,17 +557,19 @@ class Probe2D:
 
 
 def point_load_field(probe: Probe2D, candidate: str, positions_mm, depth_mm=1.0, indentor="wedge",
-                     threshold_frac=0.5, threshold=None) -> ReceptiveField:
-    """Receptive field of the receptor at site 0 of the probe (its first depth) from a point-load
-    (line load in 2D: a sharp wedge) swept over positions_mm, indented depth_mm at each position.
-    threshold: absolute; default threshold_frac * the largest value of the sweep."""
+                     threshold_frac=0.5, threshold=None, site_x_mm=0.0) -> ReceptiveField:
+    """Receptive field of the probe's receptor nearest site_x_mm (its first depth) from a point
+    load (a line load in 2D: the sharp wedge) swept over positions_mm, indented depth_mm at each.
+    threshold: absolute; default threshold_frac * the largest value of the sweep (the thesis's
+    threshold is arbitrary, and the field size depends on it)."""
     from fem.indentors import make_indentor
 
     ind = make_indentor(indentor, orientation="parallel", position_mm=(0.0, 0.0))
     vals, _ = probe.measure(ind, positions_mm, [candidate], depth_mm=depth_mm)
-    v = vals[candidate][:, 0, 0]
+    k = int(np.argmin(np.abs(probe.sites_x_mm - site_x_mm)))
+    v = vals[candidate][:, 0, k]
     thr = threshold_frac * v.max() if threshold is None else threshold
-    return receptive_field(positions_mm, v, thr, probe.sites_x_mm[0])
+    return receptive_field(positions_mm, v, thr, probe.sites_x_mm[k])
 
 
 def two_point_curves(probe: Probe2D, separations_mm, depth_mm=0.5, candidate="sed_MPa", tip="",

@@ -16,10 +16,13 @@ tension (the thesis's second explanation). With the dashpot unable to hold a sta
 relaxes to 0 in any hold: a large damping (tau much longer than the hold) gives a slowly adapting
 (SA) receptor whose rate follows x; a small one (tau much shorter than the ramp) a rapidly adapting
 (RA) receptor with r ~ tau x', firing only while x rises. During a withdrawal x' < 0 drives r down:
-an RA receptor is silent at once (r ~ tau x' < 0); an SA receptor whose hold response r_h has
-not adapted keeps a decaying response for t0 = tau ln(1 + r_h / (v tau)) (v: withdrawal speed),
-then falls silent (`silence_delay`); under force drive the weak spring, discharging through the
-dashpot, compresses the receptor (r = -k_w x / k_r once F = 0), so it stays silent afterwards.
+an RA receptor is silent at once (r ~ tau x' < 0). An SA receptor whose hold response r_h has not
+adapted is NOT silent at once: its rate falls with the skin for t0 = tau ln(1 + r_h / (v tau))
+(`silence_delay`; v the withdrawal speed; t0 < the withdrawal time, e.g. 80 of 100 ms for
+tau = 5 s after a 1 s hold), then it is silent, with no off-response. Silence through the whole
+withdrawal needs the thesis's premise that the receptor has relaxed during the hold (r_h ~ 0).
+Under force drive the weak spring, discharging through the dashpot, compresses the receptor
+(r = -k_w x / k_r once F = 0), so it stays silent afterwards.
 
 The ODE is linear with a piecewise-linear input between samples, so it is integrated exactly
 (exponential integrator): no step-size error.
