@@ -5,6 +5,7 @@ a full re-solve, for the issue-5 cases; plus the 3D Hertz verification on a larg
     python benchmarks/contact_bench.py grating                  # (a) 2D cylinder with bone, 150 positions
     python benchmarks/contact_bench.py steps --model out/monkey # (b) 40 constant-force step positions, 3D
     python benchmarks/contact_bench.py c5 --model out/human     # (c) C5 to 3 mm in 0.5 mm steps, 3D
+    python benchmarks/contact_bench.py dorsal --model out/human # thesis trend: dorsal half < 10 %
     python benchmarks/contact_bench.py hertz                    # rigid sphere on a 40 mm quarter block
 
 Setup = reading the mesh, assembling and factorising, building the receptor operators (meshing is
@@ -110,6 +111,22 @@ def case_c5(args):
                 middle_line=True)
 
 
+def case_dorsal(args):
+    """Thesis 6.2.1 trend: under a 2 mm line load (wedge perpendicular to the axis, middle of the
+    pad) the dorsal half (y < 0) moves less than 10 % of the largest vertical displacement."""
+    model, system, region, sampler, cm, setup_s = _setup(args.model or "out/human")
+    z = cm.points_mm[:, 2]
+    ind = make_indentor("wedge", orientation="perpendicular", position_mm=(0.0, 0.5 * (z.min() + z.max())))
+    t = time.perf_counter()
+    res = cm.indent(ind, depth_mm=2.0)
+    uy = np.abs(cm.compliance(ind.approach).displacement(res.force_N).reshape(-1, 3)[:, 1])
+    ratio = uy[model.nodes[:, 1] < 0].max() / uy.max()
+    row = (f"| dorsal half under a 2 mm line load, 3D human | {model.ndof} | {res.total_force_N:.4g} N | "
+           f"{ratio:.1%} | {'yes' if ratio < 0.1 else 'NO'} | {setup_s + time.perf_counter() - t:.1f} s |")
+    print(row, flush=True)
+    return row
+
+
 def case_hertz(args):
     """Rigid sphere R = 5 mm on a quarter block 40 x 40 x 40 mm (graded P2 tets), E = 1 MPa."""
     from fem.reference import box, fine_then_growing, hertz_sphere
@@ -139,18 +156,21 @@ def case_hertz(args):
 
 TIMING_HEADER = ("| case | DOFs | indentations | setup s | ms per indentation | total s | target s | "
                  "met | force diff | receptor SED diff | max penetration mm |\n|---|---|---|---|---|---|---|---|---|---|---|")
+DORSAL_HEADER = ("| case | DOFs | force | max dorsal / max vertical displacement | < 10 % | time |\n"
+                 "|---|---|---|---|---|---|")
 HERTZ_HEADER = ("| nu | DOFs | depth mm | force err | contact radius err | peak pressure err | penetration mm | "
                 "setup s | solve s |\n|---|---|---|---|---|---|---|---|---|")
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("case", choices=["grating", "steps", "c5", "hertz"])
+    ap.add_argument("case", choices=["grating", "steps", "c5", "dorsal", "hertz"])
     ap.add_argument("--model", help="model folder (mesh.vtu, model.json)")
     args = ap.parse_args()
-    header = HERTZ_HEADER if args.case == "hertz" else TIMING_HEADER
+    header = {"hertz": HERTZ_HEADER, "dorsal": DORSAL_HEADER}.get(args.case, TIMING_HEADER)
     print(header)
-    rows = {"grating": case_grating, "steps": case_steps, "c5": case_c5, "hertz": case_hertz}[args.case](args)
+    rows = {"grating": case_grating, "steps": case_steps, "c5": case_c5, "dorsal": case_dorsal,
+            "hertz": case_hertz}[args.case](args)
     rows = rows if isinstance(rows, list) else [rows]
     RESULTS.parent.mkdir(parents=True, exist_ok=True)
     stamp = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
