@@ -279,3 +279,32 @@ def test_settling_separation_definition():
     assert math.isnan(settling_separation(s, [1, 2, 3, 4, 5, 6]))
     with pytest.raises(InputError):
         make_neural(["a"], [0.0], [float("nan")])
+
+
+def test_units_fitted_separately_and_orientation_selected(run8):
+    """Two units with different depths in one file: each gets its own parameters; rows of another
+    orientation are left out with --orientation."""
+    from fem.analysis import analyze
+
+    runs = {math.nan: run8}
+    u1, a1 = synthetic(runs, depth=0.625, noise=0.5, seed=11)
+    u2, a2 = synthetic(runs, depth=1.0, noise=0.5, seed=12)
+    n1, n2 = len(u1), len(u2)
+    data = make_neural(np.concatenate([u1.stimulus, u2.stimulus, u2.stimulus]),
+                       np.concatenate([u1.position_mm, u2.position_mm, u2.position_mm]),
+                       np.concatenate([u1.rate_ips, u2.rate_ips, 0 * u2.rate_ips]),
+                       ["SA1-a"] * n1 + ["SA1-b"] * n2 + ["SA1-b"] * n2,
+                       ["parallel"] * (n1 + n2) + ["perpendicular"] * n2)
+    res = {ua.unit: ua for ua in analyze(runs, data, ["sed_MPa", "max_compressive_strain"], orientation="parallel")}
+    assert set(res) == {"SA1-a", "SA1-b"}
+    for unit, depth, a in (("SA1-a", 0.625, a1), ("SA1-b", 1.0, a2)):
+        best = res[unit].combined[0]
+        assert best.measure == "sed_MPa" and best.depth_mm == depth and abs(best.a / a - 1) < 0.02
+        assert best.n == n1 if unit == "SA1-a" else best.n == n2
+    with pytest.raises(InputError, match="no rows with orientation"):
+        analyze(runs, data, ["sed_MPa"], orientation="oblique")
+
+
+def test_probe_sites_must_lie_over_the_surface(models):
+    with pytest.raises(InputError, match="receptor sites must lie over the contact surface"):
+        Probe2D(models[8], [0.0, 5.0])
