@@ -40,6 +40,12 @@ from fem.indentors import make_indentor  # noqa: E402
 RESULTS = HERE / "results"
 
 
+def _save(fig, name):
+    fig.tight_layout()
+    fig.savefig(RESULTS / f"analysis_bench_{name}.png", dpi=100)
+    plt.close(fig)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--work", default="out/analysis_bench")
@@ -73,9 +79,7 @@ def main(argv=None):
         ax[1, k].imshow(on, extent=(x[0], x[-1], y[0], y[-1]), cmap="Greys", origin="lower")
         ax[1, k].set(title=f"{f.shape}: {f.diameter_mm:.2f} mm" + (f", hole {f.hole_mm:.2f}" if f.shape == "annulus"
                                                                      else ""))
-    fig.tight_layout()
-    fig.savefig(RESULTS / "analysis_bench_fields.png", dpi=100)
-    plt.close(fig)
+    _save(fig, "fields")
     md.append(f"\n({time.perf_counter() - t0:.1f} s)")
 
     # 2. two-point
@@ -104,9 +108,7 @@ def main(argv=None):
         a.plot(0.5 * seps, c["alone_" + key], "s--", label="one load alone at +s/2")
         a.set(title=f"equal {key}", xlabel="half separation, mm", ylabel="max SED at 0.75 mm, MPa")
         a.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(RESULTS / "analysis_bench_two_point.png", dpi=100)
-    plt.close(fig)
+    _save(fig, "two_point")
     md.append(f"\n({time.perf_counter() - t0:.1f} s)")
 
     # 3. gaps
@@ -122,9 +124,7 @@ def main(argv=None):
         ax.plot(probe.sites_x_mm, v, label=f"gap {g:g} mm")
     ax.set(xlabel="receptor x, mm", ylabel="|strain_xy| at 0.75 mm")
     ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(RESULTS / "analysis_bench_gaps.png", dpi=100)
-    plt.close(fig)
+    _save(fig, "gaps")
     md.append(f"\n({time.perf_counter() - t0:.1f} s)")
 
     # 4. spatial profile vs population response
@@ -153,16 +153,12 @@ def main(argv=None):
         ok = np.isfinite(shifted)
         md.append(f"| {x_site:.2f} | {100 * np.sqrt(np.mean((shifted[ok] - central[ok]) ** 2)) / central.max():.1f} |")
     ax[-1].set_xlabel("grating position relative to the receptor, mm")
-    fig.tight_layout()
-    fig.savefig(RESULTS / "analysis_bench_profiles.png", dpi=100)
-    plt.close(fig)
+    _save(fig, "profiles")
     fig, a = plt.subplots(figsize=(8, 3))
     a.plot(xp, vp, ".-")
     a.set(title="population response: all receptors at 0.75 mm, grating at -8 mm", xlabel="receptor x, mm",
           ylabel="sed_MPa")
-    fig.tight_layout()
-    fig.savefig(RESULTS / "analysis_bench_population.png", dpi=100)
-    plt.close(fig)
+    _save(fig, "population")
     md.append(f"\n({time.perf_counter() - t0:.1f} s)")
 
     # 5. lumped receptor model on an FE measure
@@ -188,9 +184,7 @@ def main(argv=None):
         md.append(f"| {name} | {tau:g} | {out['rate'][ramp_end]:.3f} | "
                   f"{out['rate'][hold_end] / out['rate'].max():.3f} | {fire:.0f} |")
     ax[-1].set_xlabel("time, s")
-    fig.tight_layout()
-    fig.savefig(RESULTS / "analysis_bench_dynamics.png", dpi=100)
-    plt.close(fig)
+    _save(fig, "dynamics")
     (RESULTS / "analysis_bench.md").write_text("\n".join(md) + "\n")
     print("\n".join(md))
 

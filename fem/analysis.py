@@ -778,38 +778,6 @@ def run_analyze(results, neural_csv, out_dir=None, diameters_mm=None, measures=N
     """`pipeline.py analyze`: read runs and recordings, rank, write the report. Returns a summary."""
     from fem.neural import read_neural_csv
 
-    results = list(results) if not isinstance(results, (str, Path)) else [results]
-    if len(results) > 2:
-        raise InputError("give one results folder, or two (2D models of two diameters)")
-    if diameters_mm is not None and len(results) != 2:
-        raise InputError("--diameters needs two results folders")
-    runs = [IndentRun(r, None if diameters_mm is None else diameters_mm[i]) for i, r in enumerate(results)]
-    neural = read_neural_csv(neural_csv)
-    cands = None if not measures else [m.strip() for m in measures.split(",") if m.strip()]
-    fit = None if not fit_on else [s.strip() for s in fit_on.split(",") if s.strip()]
-    runs = as_runs(runs)
-    res = analyze(runs, neural, cands, fit, receptor_x_mm, orientation)
-    out = Path(out_dir) if out_dir else Path(results[0]) / "analysis"
-    names = write_report(out, runs, neural, res)
-    lines = [f"receptor analysis in {out}: {', '.join(names)}"]
-    for ua in res:
-        lines.append(f"  unit {ua.unit}: {sum(len(neural.only(unit=ua.unit)) for _ in [0])} recorded rates, "
-                     f"fit on {', '.join(ua.combined[0].stimuli)}")
-        lines.append("    rank  measure                   RMS imp/s   R^2     depth mm  diameter mm")
-        for i, f in enumerate(ua.combined):
-            dia = "" if math.isnan(f.diameter_mm) else f"{f.diameter_mm:g}"
-            lines.append(f"    {i + 1:>4}  {f.measure:<25} {f.rms_ips:>9.3f}  {f.r2:.4f}  {f.depth_mm:>8.3g}  {dia:>11}")
-        for r in ua.prediction[:3 * max(1, len(neural.stimuli))]:
-            if r["measure"] == ua.combined[0].measure:
-                lines.append(f"    {r['measure']} predicts {r['predicted']}: R^2 {r['r2']:.4f}, RMS {r['rms_ips']:.3f} imp/s")
-    return "\n".join(lines)
-
-
-def run_analyze(results, neural_csv, out_dir=None, diameters_mm=None, measures=None, fit_on=None,
-                orientation=None, receptor_x_mm=0.0) -> str:
-    """`pipeline.py analyze`: read runs and recordings, rank, write the report. Returns a summary."""
-    from fem.neural import read_neural_csv
-
     results = [results] if isinstance(results, (str, Path)) else list(results)
     if len(results) > 2:
         raise InputError("give one results folder, or two (2D models of two diameters)")
