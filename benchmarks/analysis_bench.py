@@ -136,14 +136,14 @@ def main(argv=None):
     run = IndentRun(runs_dir)
     fig, ax = plt.subplots(3, 1, figsize=(8, 7), sharex=True)
     x_sites = run.population("grating_0.5", "sed_MPa", 0.75, 0.0)[0]
-    pos, central = run.profile("grating_0.5", "sed_MPa", 0.75, 0.0)
+    pos, central = run.profile("grating_0.5", "sed_MPa", 0.75, 0.0, align=False)
     pos = pos - x_sites[run.site_index("grating_0.5", 0.0)]          # stimulus position relative to the receptor
     md += ["", "## Spatial response profile vs population (grating 0.5 mm, SED at 0.75 mm)", "",
            "Receptor sites are those of the indent grid (spacing 0.5 mm): the most central one is not at x = 0.", "",
            "| receptor x mm | rms difference to the most central profile (both shifted), % of its peak |",
            "|---|---|"]
     for a, rx in zip(ax, (0.0, 1.0, 2.0)):
-        p, v = run.profile("grating_0.5", "sed_MPa", 0.75, rx)
+        p, v = run.profile("grating_0.5", "sed_MPa", 0.75, rx, align=False)
         x_site = x_sites[run.site_index("grating_0.5", rx)]
         a.plot(pos, central, color="0.7", label="most central receptor")
         a.plot(p - x_site, v, label=f"receptor at x = {x_site:.2f} mm, shifted")

@@ -38,7 +38,9 @@ def synthetic_rates(runs, truth=TRUTH, step=1):
     first = next(iter(runs.values()))
     stim, pos, rate = [], [], []
     for s in first.stimuli:
+        ranges = [run.profile(s, truth["measure"], truth["depth_mm"])[0] for run in runs.values()]
         p = first.positions(s)[::step]
+        p = p[(p >= max(r.min() for r in ranges)) & (p <= min(r.max() for r in ranges))]  # receptor-aligned sweeps
         S = model_values(runs, s, truth["measure"], truth["depth_mm"], truth["diameter_mm"], p)
         d = truth["a"] * S + truth["b"] + rng.normal(0.0, truth["noise_ips"], len(p))
         stim += [s] * len(p)

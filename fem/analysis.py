@@ -119,7 +119,8 @@ class IndentRun:
         steps = _read_csv(self.folder / f"{stimulus}.csv")
         offx = np.array([float(r["offset_x_mm"]) for r in steps])
         offz = np.array([float(r["offset_z_mm"]) for r in steps])
-        position = offz if np.ptp(offz) > np.ptp(offx) else offx
+        along_z = np.ptp(offz) > np.ptp(offx)
+        position = offz if along_z else offx
         path = self.folder / f"{stimulus}_receptors.csv"
         with open(path) as fh:
             header = fh.readline().strip().split(",")
@@ -140,7 +141,7 @@ class IndentRun:
         site = np.empty(n, int)
         for d in depths:
             site[depth == d] = np.arange(k_sites)
-        data = {"position": position, "depth": depth, "site": site, "depths": depths,
+        data = {"position": position, "along_z": along_z, "depth": depth, "site": site, "depths": depths,
                 "x": cols["x_mm"][0], "y": cols["y_mm"][0], "z": cols["z_mm"][0],
                 "values": {h: cols[h] for h in header[5:]}, "steps": steps}
         self._cache[stimulus] = data
@@ -176,14 +177,22 @@ class IndentRun:
         rz = 0.5 * (z.min() + z.max()) if receptor_z_mm is None else receptor_z_mm
         return int(np.argmin((d["x"][top] - receptor_x_mm) ** 2 + (z - rz) ** 2))
 
-    def profile(self, stimulus, candidate, depth_mm, receptor_x_mm=0.0, site=None):
+    def profile(self, stimulus, candidate, depth_mm, receptor_x_mm=0.0, site=None, align=True):
         """Spatial response profile: (positions (k,), values (k,)) of one receptor (the site
-        nearest receptor_x_mm, at the listed depth nearest depth_mm) as the stimulus steps."""
+        nearest receptor_x_mm, at the listed depth nearest depth_mm) as the stimulus steps.
+
+        align (sweeps along x): the site's profile is translated by receptor_x_mm - site x, i.e.
+        it stands for a receptor exactly at receptor_x_mm (the sites of an `indent` grid are
+        cells of its spacing, the most central one 0.2 mm off x = 0 on the 2D cylinders; two runs
+        of different diameters then describe the same receptor)."""
         d = self._load(stimulus)
         depth = d["depths"][np.argmin(np.abs(d["depths"] - depth_mm))]
         s = self.site_index(stimulus, receptor_x_mm) if site is None else site
         j = np.flatnonzero((d["depth"] == depth) & (d["site"] == s))[0]
-        return d["position"], self.values(stimulus, candidate)[:, j]
+        shift = 0.0
+        if align and not d["along_z"]:
+            shift = receptor_x_mm - d["x"][np.flatnonzero((d["depth"] == d["depths"][0]) & (d["site"] == s))[0]]
+        return d["position"] + shift, self.values(stimulus, candidate)[:, j]
 
     def population(self, stimulus, candidate, depth_mm, position_mm):
         """Population response: (receptor x (n,), values (n,)) of all receptors at one depth for the
@@ -291,11 +300,12 @@ def model_values(runs, stimulus, candidate, depth_mm, diameter_mm, positions_mm,
     return (1 - w) * out[0] + w * out[1]
 
 
-def check_coverage(runs, neural: NeuralData) -> None:
-    """Every recorded stimulus exists in every run and its positions lie inside the simulated sweep."""
+def check_coverage(runs, neural: NeuralData, receptor_x_mm=0.0) -> None:
+    """Every recorded stimulus exists in every run and its positions lie inside the simulated sweep
+    (as aligned to the receptor, `IndentRun.profile`)."""
     for run in as_runs(runs).values():
         for s in neural.stimuli:
-            pos = run.positions(s)
+            pos = run.profile(s, next(iter(run.measures(s))), run.depths(s)[0], receptor_x_mm)[0]
             got = neural.position_mm[neural.stimulus == s]
             lo, hi = pos.min(), pos.max()
             out = got[(got < lo - 1e-9) | (got > hi + 1e-9)]
@@ -339,7 +349,7 @@ def fit_measure(runs, neural: NeuralData, candidate: str, fit_stimuli=None, dept
     if not len(data):
         raise InputError(f"no recorded rows for the fit stimuli {fit_stimuli}")
     stimuli = data.stimuli
-    check_coverage(runs, data)
+    check_coverage(runs, data, receptor_x_mm)
     depths = depth_grid(runs, stimuli) if depths_mm is None else np.atleast_1d(depths_mm)
     diameters = diameter_grid(runs) if diameters_mm is None else np.atleast_1d(diameters_mm)
     best = None
@@ -672,7 +682,7 @@ def analyze(runs, neural: NeuralData, candidates=None, fit_stimuli=None, recepto
                          f"(each orientation needs its own indentation run)")
     if candidates is not None:
         check_candidates(candidates)
-    check_coverage(runs, neural)
+    check_coverage(runs, neural, receptor_x_mm)
     if fit_stimuli is not None:
         missing = [s for s in fit_stimuli if s not in neural.stimuli]
         if missing:

@@ -58,17 +58,25 @@ def run8(models):
     return IndentRun(models[8] / "sweeps")
 
 
+def covered(runs, stimulus):
+    """Sweep positions of the first run inside every run's receptor-aligned profile range."""
+    ranges = [run.profile(stimulus, "sed_MPa", 0.75)[0] for run in runs.values()]
+    p = next(iter(runs.values())).positions(stimulus)
+    return p[(p >= max(r.min() for r in ranges)) & (p <= min(r.max() for r in ranges))]
+
+
 def synthetic(runs, measure="sed_MPa", depth=0.75, diameter=math.nan, peak=60.0, b=8.0, noise=2.0, seed=3,
               stimuli=None):
     """Rates from the model with known parameters; a is set so that a * max(S) = peak."""
     first = next(iter(runs.values()))
     stimuli = stimuli or first.stimuli
-    smax = max(np.abs(model_values(runs, s, measure, depth, diameter, first.positions(s))).max() for s in stimuli)
+    where = {s: covered(runs, s) for s in stimuli}
+    smax = max(np.abs(model_values(runs, s, measure, depth, diameter, where[s])).max() for s in stimuli)
     a = peak / smax
     rng = np.random.default_rng(seed)
     st, pos, rate = [], [], []
     for s in stimuli:
-        p = first.positions(s)
+        p = where[s]
         S = model_values(runs, s, measure, depth, diameter, p)
         st += [s] * len(p)
         pos += list(p)
@@ -119,8 +127,8 @@ def test_diameter_recovered_by_interpolating_8_and_16_mm(models):
     assert f.diameter_mm == 12.0 and f.depth_mm == 0.625
     assert abs(f.a / a_true - 1) < 0.03
     # the two models really differ for these stimuli (the diameter is identifiable)
-    s8 = model_values(runs, "grating", "sed_MPa", 0.75, 8.0, runs[8.0].positions("grating"))
-    s16 = model_values(runs, "grating", "sed_MPa", 0.75, 16.0, runs[8.0].positions("grating"))
+    s8 = model_values(runs, "grating", "sed_MPa", 0.75, 8.0, covered(runs, "grating"))
+    s16 = model_values(runs, "grating", "sed_MPa", 0.75, 16.0, covered(runs, "grating"))
     assert np.abs(s8 - s16).max() > 0.1 * s8.max()
 
 
@@ -198,12 +206,12 @@ def test_spatial_profile_vs_population_response(run8):
     """The central receptor's profile at stimulus offset 0 is the population value at that receptor;
     an off-centre receptor's profile, shifted by its offset, differs from the central one on the
     curved finger (thesis 4.5.4, figure 4-18)."""
-    pos, central = run8.profile("grating", "sed_MPa", 0.75, receptor_x_mm=0.0)
+    pos, central = run8.profile("grating", "sed_MPa", 0.75, receptor_x_mm=0.0, align=False)
     x, popul = run8.population("grating", "sed_MPa", 0.75, position_mm=0.0)
     k = np.argmin(np.abs(x - 0.0))
     assert central[np.argmin(np.abs(pos))] == pytest.approx(popul[k], rel=1e-12)
     site_x = x[np.argmin(np.abs(x - 1.0))]
-    pos1, off = run8.profile("grating", "sed_MPa", 0.75, receptor_x_mm=1.0)
+    pos1, off = run8.profile("grating", "sed_MPa", 0.75, receptor_x_mm=1.0, align=False)
     shifted = np.interp(pos, pos1 - site_x, off)                  # same stimulus-receptor offset
     inside = (pos - site_x >= pos1.min() - site_x) & (pos <= pos1.max() - site_x)
     diff = np.sqrt(np.mean((shifted[inside] - central[inside]) ** 2)) / central.max()
