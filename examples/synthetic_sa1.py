@@ -77,7 +77,7 @@ def main(argv=None):
     with open(out / "analysis" / "ranking_combined.csv") as fh:
         best = next(csv.DictReader(fh))
     print("\nground truth :", TRUTH)
-    print("recovered    :", {k: best[k] for k in ("measure", "depth_mm", "diameter_mm", "a_ips_per_unit", "b_ips",
+    print("recovered    :", {k: best[k] for k in ("measure", "depth_mm", "diameter_mm", "a_ips_per_measure_unit", "b_ips",
                                                   "rms_ips", "r2")})
 
 

@@ -262,8 +262,9 @@ class Fit:
 
     def row(self) -> dict:
         return {"unit": self.unit, "measure": self.measure, "thesis_name": THESIS_CANDIDATES.get(self.measure, ""),
+                "measure_unit": MEASURES[base_measure(self.measure)].unit,
                 "r2": self.r2, "rms_ips": self.rms_ips, "depth_mm": self.depth_mm,
-                "diameter_mm": self.diameter_mm, "a_ips_per_unit": self.a, "b_ips": self.b, "n": self.n,
+                "diameter_mm": self.diameter_mm, "a_ips_per_measure_unit": self.a, "b_ips": self.b, "n": self.n,
                 "stimuli": " ".join(self.stimuli)}
 
 
@@ -698,7 +699,7 @@ def analyze(runs, neural: NeuralData, candidates=None, fit_stimuli=None, recepto
                 for s, (r2, rms) in (f.evaluate(runs, others).items() if len(others) else []):
                     ua.prediction.append({"unit": unit, "measure": f.measure, "fit_on": " ".join(f.stimuli),
                                           "predicted": s, "r2": r2, "rms_ips": rms, "depth_mm": f.depth_mm,
-                                          "diameter_mm": f.diameter_mm, "a_ips_per_unit": f.a, "b_ips": f.b})
+                                          "diameter_mm": f.diameter_mm, "a_ips_per_measure_unit": f.a, "b_ips": f.b})
         out.append(ua)
     return out
 
