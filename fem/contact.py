@@ -712,3 +712,13 @@ def _plots(folder, name, ind, steps, sn, x3, sampler, measures, rows):
     fig.tight_layout()
     fig.savefig(folder / f"{name}_receptors.png", dpi=110)
     plt.close(fig)
+    if sn.x.shape[1] == 3:          # contact pressure map of the last indentation, seen along the approach
+        r = steps[-1][1]
+        fig, ax = plt.subplots(figsize=(6, 5))
+        sc = ax.scatter(u, v, c=r.pressure_MPa, s=6, cmap="viridis")
+        ax.set(xlabel="along the indentor, mm", ylabel="across the indentor, mm", aspect="equal",
+               title=f"{name}: contact pressure, depth {r.depth_mm.max():.2f} mm")
+        fig.colorbar(sc, label="pressure_MPa")
+        fig.tight_layout()
+        fig.savefig(folder / f"{name}_pressure.png", dpi=110)
+        plt.close(fig)

@@ -145,3 +145,30 @@ def test_bad_receptor_line(cyl8, tmp_path, capsys):
     assert pipeline.main(["indent", str(cyl8), "--indentor", "C5", "--depth", "1", "--line", "z=abc",
                           "--out", str(out), "--quiet"]) == 2
     assert "receptor line" in capsys.readouterr().err and not out.exists()
+
+
+def test_3d_block_model_folder(tmp_path):
+    """The 3D path of `indent`: a small block model folder (nail = bottom, volar = top), a sphere at
+    two depths: forces grow, the top face is the contact region, a pressure map is drawn."""
+    import meshio
+
+    from fem.reference import box
+
+    p, cells, r = box(np.linspace(-3, 3, 9), np.linspace(-2, 0, 4), np.linspace(0, 6, 9))
+    model_dir = tmp_path / "block"
+    model_dir.mkdir()
+    meshio.write(model_dir / "mesh.vtu", meshio.Mesh(p, [("tetra", cells)], cell_data={"layer": [np.ones(len(cells), int)]},
+                                                     point_data={"nail": r["ymin"].astype(np.uint8),
+                                                                 "volar": r["ymax"].astype(np.uint8)}))
+    out = tmp_path / "out"
+    assert pipeline.main(["indent", str(model_dir), "--indentor", "sphere:3", "--depth", "0.1,0.2",
+                          "--material", "m33338", "--out", str(out), "--quiet"]) == 0
+    rows = _rows(out / "sphere_3.csv")
+    assert 0 < float(rows[0]["force_N"]) < float(rows[1]["force_N"])
+    assert all(r["kkt_ok"] == "True" for r in rows)
+    surf = _rows(out / "sphere_3_surface.csv")
+    loaded = [s for s in surf if float(s["force_N"]) > 0]
+    assert loaded and all(abs(float(s["y_mm"])) < 1e-12 for s in loaded)
+    near = [abs(float(s["x_mm"])) + abs(float(s["z_mm"]) - 3.0) for s in loaded]
+    assert max(near) < 2.0                                     # under the sphere at (0, 3)
+    assert (out / "sphere_3_pressure.png").is_file()
