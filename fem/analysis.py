@@ -181,7 +181,8 @@ class IndentRun:
         """Spatial response profile: (positions (k,), values (k,)) of one receptor (the site
         nearest receptor_x_mm, at the listed depth nearest depth_mm) as the stimulus steps.
 
-        align (sweeps along x): the site's profile is translated by receptor_x_mm - site x, i.e.
+        align (sweeps along x; a single indentation is never moved): the site's profile is
+        translated by receptor_x_mm - site x, i.e.
         it stands for a receptor exactly at receptor_x_mm (the sites of an `indent` grid are
         cells of its spacing, the most central one 0.2 mm off x = 0 on the 2D cylinders; two runs
         of different diameters then describe the same receptor)."""
@@ -190,7 +191,7 @@ class IndentRun:
         s = self.site_index(stimulus, receptor_x_mm) if site is None else site
         j = np.flatnonzero((d["depth"] == depth) & (d["site"] == s))[0]
         shift = 0.0
-        if align and not d["along_z"]:
+        if align and not d["along_z"] and len(d["position"]) > 1:
             shift = receptor_x_mm - d["x"][np.flatnonzero((d["depth"] == d["depths"][0]) & (d["site"] == s))[0]]
         return d["position"] + shift, self.values(stimulus, candidate)[:, j]
 
@@ -742,6 +743,21 @@ def _plot_profiles(path, runs, data, fits):
     import matplotlib.pyplot as plt
 
     stimuli = data.stimuli
+    if all(len(set(data.position_mm[data.stimulus == s])) == 1 for s in stimuli):
+        # one indentation per stimulus (e.g. cylinders at constant force, thesis figure 4-26)
+        fig, ax = plt.subplots(figsize=(max(5, 0.8 * len(stimuli) + 2), 3.6))
+        k = np.arange(len(stimuli))
+        ax.plot(k, [data.rate_ips[data.stimulus == s].mean() for s in stimuli], "kx", ms=9, mew=2, label="recorded")
+        for f in fits:
+            ax.plot(k, [f.predict(runs, s, data.position_mm[data.stimulus == s][:1])[0] for s in stimuli], "o-",
+                    label=f"{f.measure} (depth {f.depth_mm:g} mm)")
+        ax.set_xticks(k, stimuli)
+        ax.set(ylabel="rate, imp/s")
+        ax.legend(fontsize=7)
+        fig.tight_layout()
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        return
     fig, axes = plt.subplots(len(stimuli), 1, figsize=(9, 2.4 * len(stimuli)), squeeze=False)
     for s, ax in zip(stimuli, axes[:, 0]):
         part = data.only(stimuli=[s])

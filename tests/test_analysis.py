@@ -316,3 +316,27 @@ def test_units_fitted_separately_and_orientation_selected(run8):
 def test_probe_sites_must_lie_over_the_surface(models):
     with pytest.raises(InputError, match="receptor sites must lie over the contact surface"):
         Probe2D(models[8], [0.0, 5.0])
+
+
+def test_single_indentation_stimuli_cylinders_at_constant_force(models, tmp_path):
+    """Thesis 4.6: one constant-force indentation per cylinder, one rate each; the fit pools the
+    cylinders (positions all 0: no sweep, no translation of the receptor)."""
+    scene = tmp_path / "cyl.toml"
+    scene.write_text('[receptors]\ndepths_mm = [0.5, 0.75, 1.0]\nspacing_mm = 0.5\n'
+                     'measures = ["sed_MPa", "max_compressive_strain"]\n[output]\npvd = false\nplots = false\n'
+                     + "".join(f'[[experiment]]\nname = "{c}"\nindentor = "{c}"\nforce_N = 0.001\n'
+                               for c in ("C1", "C3", "C5", "C8")))
+    out = tmp_path / "cyl"
+    assert pipeline.main(["indent", str(models[8]), "--scene", str(scene), "--out", str(out), "--quiet"]) == 0
+    run = IndentRun(out)
+    runs = {math.nan: run}
+    S = {c: run.profile(c, "max_compressive_strain", 1.0)[1][0] for c in run.stimuli}
+    assert len({round(v, 12) for v in S.values()}) == 4                  # the cylinders differ
+    data = make_neural(list(S), [0.0] * 4, [500.0 * v + 3.0 for v in S.values()])
+    f = fit_measure(runs, data, "max_compressive_strain")
+    assert f.depth_mm == 1.0 and f.a == pytest.approx(500.0, rel=1e-9) and f.rms_ips < 1e-9
+    csv_path = tmp_path / "rates.csv"
+    write_neural_csv(csv_path, data)
+    assert pipeline.main(["analyze", str(out), "--neural", str(csv_path), "--out", str(tmp_path / "rep"),
+                          "--quiet"]) == 0
+    assert (tmp_path / "rep" / "profiles_unit.png").is_file()
