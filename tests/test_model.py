@@ -167,3 +167,12 @@ def test_sections_json_with_the_tip_is_cut_before_the_rounded_tip(tmp_path):
     assert full.z_mm[0] == 2.0 and full.z_mm[-1] == 9.0
     with pytest.raises(InputError, match="thicker than the section"):        # 0.37 x width at 21.5
         model_from_args(str(src), None, params_for(None), z_range_mm=(0.0, 21.5))
+
+
+def test_inclined_support_is_recorded_with_the_vertical_direction():
+    m = cylinder_model(support_incline_deg=30.0)
+    sup = m.to_json()["regions"]["support"]
+    assert sup["normal"] == [0.0, 1.0, 0.0] and sup["incline_deg"] == 30.0
+    assert sup["vertical_up"] == pytest.approx([0.0, np.cos(np.pi / 6), -0.5])
+    with pytest.raises(InputError):
+        cylinder_model(support_incline_deg=95.0)
