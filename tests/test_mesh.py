@@ -103,7 +103,7 @@ def test_quality_and_sizing_are_reported_and_sane(built):
     assert fine == pytest.approx(0.8, rel=0.25)
 
 
-def test_cache_returns_the_same_mesh_and_force_is_accepted(built, tmp_path):
+def test_cache_returns_the_same_mesh_and_keys_change_with_inputs(built, tmp_path):
     out, cache = built
     assert len(list(cache.rglob("*.npz"))) == 1
     again = tmp_path / "again"
