@@ -143,15 +143,6 @@ def _fast_pardiso():
         os.environ["PYPARDISO_MKL_RT"] = name
 
 
-def _release(model) -> None:
-    """Free PARDISO's internal factor memory of a model we are done with (pypardiso frees it
-    only on request; a fit builds many models)."""
-    for factor in getattr(model, "_factors", {}).values():
-        solver = getattr(factor, "_pardiso", None)
-        if solver is not None:
-            solver.free_memory(everything=True)
-
-
 class DeflectionExperiment:
     """An indentor (default the wedge: a line load) on a model folder; its deflection profiles
     and forces per material, cached by modulus ratios.
@@ -166,13 +157,20 @@ class DeflectionExperiment:
 
     def __init__(self, model_dir, indentor: str = "wedge", orientation=None, position_mm=None,
                  nu=None, band_mm: float = 0.25, side: str = "mean"):
-        from fem.contact import open_model
+        import json
+        from pathlib import Path
+
+        from fem.solver import Model
 
         _fast_pardiso()
         self.model_dir, self.nu, self.band_mm, self.side = model_dir, nu, band_mm, side
         self.indentor_code = indentor
-        model, _, region, info = open_model(model_dir, nu=nu)
-        _release(model)
+        folder = Path(model_dir)
+        if not (folder / "mesh.vtu").is_file():
+            raise InputError(f"no mesh.vtu in '{model_dir}': run `pipeline.py mesh` first or give a model folder")
+        info = json.loads((folder / "model.json").read_text()) if (folder / "model.json").is_file() else {}
+        model = Model.from_mesh(folder / "mesh.vtu", material=info.get("material", "m33338"))   # geometry only
+        region = "volar" if model.dim == 3 else "surface"          # as fem.contact.open_model
         self.dim, self.region, self.info = model.dim, region, info
         self.n_layers = len(set(model.layer.tolist()))
         sn = model.surface_nodes(region)
@@ -238,9 +236,7 @@ class DeflectionExperiment:
         return np.array([scale * res.total_force_N for res, scale in results])
 
     def clear(self) -> None:
-        """Drop every cached material and free its factorisation."""
-        for entry in self._cache.values():
-            _release(entry["model"])
+        """Drop every cached material (its factorisation is freed with it)."""
         self._cache.clear()
 
 
