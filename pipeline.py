@@ -332,8 +332,35 @@ def _run_analyze(args):
         print(text)
 
 
+# --------------------------------------------------------------------------- run
+def _add_run(sub):
+    p = sub.add_parser("run", help="the chain: reconstruct -> mesh [-> indent a scene]; current stages are skipped")
+    p.add_argument("images", nargs="?", default=str(HERE / "sample_images"),
+                   help="turntable folder (default: the bundled sample_images/)")
+    p.add_argument("--out", default="out/sample", help="output folder for every stage (default out/sample)")
+    p.add_argument("--size", type=float, default=0.5, help="mesh: target edge length on the volar skin in mm")
+    p.add_argument("--scene", help="indent: a TOML scene file to run on the model (optional)")
+    p.add_argument("--force", action="store_true", help="recompute every stage")
+    p.add_argument("--quiet", action="store_true", help="no progress and no summaries")
+    p.set_defaults(run=_run_run)
+
+
+def _run_run(args):
+    flags = [f for f, on in (("--force", args.force), ("--quiet", args.quiet)) if on]
+    steps = [["reconstruct", args.images, "--out", args.out, *flags],
+             ["mesh", args.out, "--out", args.out, "--size", str(args.size), *flags]]
+    if args.scene:
+        steps.append(["indent", args.out, "--scene", args.scene, *(["--quiet"] if args.quiet else [])])
+    parser = build_parser()
+    for step in steps:
+        if not args.quiet:
+            print(f"== {step[0]}")
+        stage = parser.parse_args(step)
+        stage.run(stage)
+
+
 # --------------------------------------------------------------------------- main
-COMMANDS = [_add_reconstruct, _add_render, _add_mesh, _add_indent, _add_study_layers, _add_fit_material, _add_analyze]
+COMMANDS = [_add_reconstruct, _add_render, _add_mesh, _add_indent, _add_study_layers, _add_fit_material, _add_analyze, _add_run]
 
 
 def build_parser() -> argparse.ArgumentParser:

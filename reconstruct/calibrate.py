@@ -59,13 +59,18 @@ class Frame:
 def template_scale(borders: Borders, diameter_mm: float) -> Scale:
     """Scale from the template disc: fit an axis-aligned ellipse to its row borders.
 
-    Rows narrower than 30 % of the widest are left out (they hold the shaft). A template that is
-    not a disc (residual over 0.5 px rms, or an aspect far from 1) is an InputError.
+    Only the rows around the widest one that are wider than half of it are used (|y| < 0.87 R of
+    the disc), so a shaft narrower than half the diameter is left out. A template that is not a
+    disc (residual over 0.5 px rms, or an aspect far from 1) is an InputError.
     """
     if borders.frame_rows.any() or borders.touches_top:
         raise InputError("the calibration template touches the image frame: photograph the whole disc")
-    w = borders.width_px
-    ok = np.isfinite(w) & (w > 0.3 * np.nanmax(w))
+    w = np.nan_to_num(borders.width_px, nan=0.0)
+    wide = np.concatenate([[False], w > 0.5 * w.max(), [False]])
+    starts, ends = np.flatnonzero(~wide[:-1] & wide[1:]), np.flatnonzero(wide[:-1] & ~wide[1:])
+    run = np.searchsorted(ends, int(np.argmax(w)), side="right")     # the run holding the widest row
+    ok = np.zeros(len(w), bool)
+    ok[starts[run]:ends[run]] = True
     rows = np.flatnonzero(ok).astype(float)
     if len(rows) < 20:
         raise InputError("the calibration template is too small in the image (under 20 rows): zoom in")
