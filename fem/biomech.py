@@ -644,6 +644,16 @@ def idealised_fits(profile: Profile, max_distance_mm=None) -> dict:
                                max_distance_mm) for k in ("waterbed", "beam")}
 
 
+def _finish(plt, fig, ax, data, path):
+    """Add the measured profiles and legends to a linear/log pair of axes and save the figure."""
+    _plot_data(ax, data)
+    for a in ax:
+        a.legend(fontsize=6)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
 def _plot_idealised(ax, fits, reach):
     x = np.linspace(0, reach, 400)
     for kind, f in fits.items():
@@ -718,12 +728,7 @@ def run_study_layers(model_dir, out_dir, base=None, layers="1,2,3,4", offsets="-
         for p, fd in zip(base_prof, fits):
             _plot_profile(ax, p, "-", f"model {p.depth_mm:g} mm")
             _plot_idealised(ax, fd, p.distance_mm[-1])
-        _plot_data(ax, data)
-        for a in ax:
-            a.legend(fontsize=7)
-        fig.tight_layout()
-        fig.savefig(tmp / "profile.png", dpi=100)
-        plt.close(fig)
+        _finish(plt, fig, ax, data, tmp / "profile.png")
     lines = [f"layer study around {base} in {out_dir} ({summary['seconds']} s, "
              f"{study.evaluations} distinct modulus ratios solved)"]
     for e in study.effects:
@@ -785,12 +790,7 @@ def run_fit_material(model_dir, out_dir, deflection_csv=None, force_csv=None, ke
                 _plot_profile(ax, b, "-", f"fit {p.depth_mm:g} mm")
                 _plot_profile(ax, s, "-.", f"{base} {p.depth_mm:g} mm")
                 _plot_idealised(ax, idealised_fits(p), p.distance_mm[-1])
-            _plot_data(ax, data)
-            for a in ax:
-                a.legend(fontsize=6)
-            fig.tight_layout()
-            fig.savefig(tmp / "fit_profiles.png", dpi=100)
-            plt.close(fig)
+            _finish(plt, fig, ax, data, tmp / "fit_profiles.png")
         if scale is not None:
             fig, a = plt.subplots(figsize=(5, 4))
             a.plot(scale.depths_mm, scale.measured_N, "kx", label="measured")
@@ -802,7 +802,7 @@ def run_fit_material(model_dir, out_dir, deflection_csv=None, force_csv=None, ke
             plt.close(fig)
     lines = [f"fit-material results in {out_dir} ({report['seconds']} s)"]
     if fit is not None:
-        free = ", ".join(f"layer {k}: 10^{fit.log10_Pa[k - 1]:.2f} Pa (x/÷ {f:.3g})"
+        free = ", ".join(f"layer {k}: 10^{fit.log10_Pa[k - 1]:.2f} Pa (uncertainty factor {f:.3g})"
                          for k, f in zip(fit.free_layers, fit.factor))
         lines += [f"  deflection fit ({len(fit.residuals_mm)} points, rms {fit.rms_mm:.3g} mm; base {base} rms "
                   f"{report['deflection_fit']['base_rms_mm']:.3g} mm): {free}",

@@ -4,18 +4,11 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-import pipeline
 from fem.nonlinear import NeoHookean2D, compare_line_load, line_load_model
 from reconstruct.errors import InputError
+from test_biomech import section  # noqa: F401  (the coarse monkey section fixture)
 
 
-@pytest.fixture(scope="module")
-def section(tmp_path_factory):
-    """Coarse five-layer 2D cross-section of the monkey model (~4k DOFs)."""
-    out = tmp_path_factory.mktemp("nonlinear") / "msec"
-    assert pipeline.main(["mesh", "--preset", "monkey", "--section-z", "5", "--size", "0.25",
-                          "--out", str(out), "--quiet"]) == 0
-    return out
 
 
 def test_tangent_is_the_derivative_and_linearises_to_the_linear_solver(section):
