@@ -101,7 +101,7 @@ def case_steps(args):
     offsets[:, 0] = np.linspace(-4.0, 5.75, 40)
     ind = make_indentor("step:3", orientation="parallel")
     return _run("(b) step 3 at 0.02 N, 40 positions, 3D monkey", args.model or "out/monkey", ind, offsets,
-                [{"force_N": 0.02}], 60.0, checks=3, middle_line=True)
+                [{"force_N": 0.02}], 60.0, checks=2, middle_line=True)
 
 
 def case_c5(args):
