@@ -23,7 +23,8 @@ g_i = int q_i (J - 1), and the small-strain limit is exactly `fem.solver.Model`'
     K = K_iso + K_p + G^T D^-1 G,   G_ij = int q_i J F^-T : grad phi_j
 
 solved as the sparse symmetric saddle system [[K_iso + K_p, G^T], [G, -D]]. Load steps scale all
-prescribed displacements; a step whose Newton iteration fails (a Jacobian J <= 0 at a
+prescribed displacements; Newton steps are backtracked (halved up to 6 times) when they do not
+lower the residual or invert an element; a load step whose Newton iteration fails (J <= 0 at a
 quadrature point, or no convergence) is halved.
 
     nl = NeoHookean2D(model)                           # fem.solver.Model, 2D
@@ -184,6 +185,23 @@ class NeoHookean2D:
             hist.append(h)
         return NonlinearResult(np.array(out_t), np.array(out_u), np.array(out_f), hist, cuts)
 
+    def _line_search(self, u, du, free, ext, norm, tries: int = 6):
+        """The full Newton step if it lowers the residual (always, near the solution: quadratic
+        convergence is kept), else the first of 1/2, 1/4, ... that does and inverts no element."""
+        alpha = 1.0
+        for _ in range(tries):
+            trial = u.copy()
+            trial[free] += alpha * du
+            try:
+                if np.linalg.norm((self.internal_force(trial) - ext)[free]) < norm:
+                    return trial
+            except FloatingPointError:
+                pass
+            alpha /= 2
+        trial = u.copy()
+        trial[free] += 2 * alpha * du          # no decrease found: take the smallest step tried
+        return trial
+
     def _newton(self, u, fixed, dfix, free, ext, tol, max_iter, scale):
         """Newton from the last converged u; the first iteration moves the prescribed DOFs by dfix
         with the consistent tangent predictor (the free DOFs follow), so that the loaded nodes
@@ -210,7 +228,9 @@ class NeoHookean2D:
                 raise RuntimeError("singular tangent")
             if it == 0:
                 u[fixed] += dfix
-            u[free] += du
+                u[free] += du
+                continue
+            u = self._line_search(u, du, free, ext, norm)
         raise RuntimeError(f"Newton did not converge in {max_iter} iterations (residual {hist[-1]:.2e})")
 
 
