@@ -41,15 +41,15 @@ def test_small_depth_reduces_to_the_linear_solver(section, nu):
 
 
 def test_newton_converges_quadratically(section):
-    """One 0.6 mm load step on the homogeneous section: in the last iterations above round-off the
-    residual (relative to the reaction) squares, r_k+1 <= C r_k^2 with C of order 1, observed
-    order >= 1.7."""
+    """One 0.6 mm load step on the homogeneous section: once the (line-searched) iterations reach
+    the full Newton step, the residual (relative to the reaction) squares, r_k+1 <= C r_k^2 with C
+    of order 1 (measured 1.7e-2, 2.4e-4, 1.2e-7, 5.3e-14), observed order >= 1.7."""
     model, _ = line_load_model(section, "m33333", half_width_mm=0.25)
     res = NeoHookean2D(model).solve({"fixed": 0.0, "load": (None, -0.6)}, steps=1, tol=1e-14)
     load = model.node_dofs(model.region_nodes("load"))[:, 1]
     r = np.array(res.history[-1]) / abs(res.reaction[-1][load].sum())
-    r = r[r > 1e-13]                                         # above the round-off floor
-    assert len(r) >= 4 and r[-1] < 1e-8
+    r = r[r > 2e-14]                                         # above the round-off floor (~1.5e-14)
+    assert len(r) >= 4 and r[-1] < 1e-10
     tail = [(a, b) for a, b in zip(r[:-1], r[1:]) if a < 3e-2]
     assert len(tail) >= 2 and all(b <= 10 * a * a for a, b in tail), r
     order = np.log(r[-1] / r[-2]) / np.log(r[-2] / r[-3])
