@@ -142,7 +142,8 @@ class _Pardiso:
     def solve(self, b: np.ndarray) -> np.ndarray:
         """x with A x = b; b (n,) or (n, k) float64, Fortran-ordered (not modified)."""
         x = np.zeros_like(b, order="F")
-        self._phase(33, b, x, 1 if b.ndim == 1 else b.shape[1])
+        if x.size:                                      # PARDISO rejects nrhs = 0
+            self._phase(33, b, x, 1 if b.ndim == 1 else b.shape[1])
         return x
 
     def __del__(self):
@@ -161,9 +162,11 @@ class _Factor:
     displacement part solves K_ff x = b exactly. (Measured on a 71k-DOF sphere: factorising K_ff
     itself with Cholesky, mtype 2, has 4.5x the factor non-zeros and 13x the flops.)
 
-    Each solve checks ||K_ff x - b|| / ||b|| per column and, only for columns above REFINE_TOL,
-    runs up to MAX_REFINE steps of iterative refinement on K_ff (stopping when a step gains less
-    than 10x).
+    Each solve checks ||K_ff x - b|| / ||b|| per column and, only for columns above the
+    refinement tolerance (REFINE_TOL at first), runs up to MAX_REFINE steps of iterative refinement
+    on K_ff. A step that gains less than 10x ends the refinement and raises this factor's tolerance
+    to 10x the residual reached, so later solves skip refinement that does not help (round-off
+    limited systems, e.g. the fingertip with moduli 1e4 apart).
     """
 
     REFINE_TOL = 1e-10
@@ -172,6 +175,7 @@ class _Factor:
     def __init__(self, Kdev: sp.csr_matrix, B: sp.csr_matrix, D: np.ndarray):
         self.Kdev, self.B, self.D = Kdev, B, D
         self.refinements = 0        # refinement steps taken by the last call
+        self.refine_tol = self.REFINE_TOL
         A = sp.bmat([[Kdev, B.T], [B, -sp.diags(D)]], format="csr")
         try:
             from pypardiso import PyPardisoSolver  # noqa: F401  (availability check)
@@ -210,12 +214,12 @@ class _Factor:
         x = self._raw(b)
         r, rel = self._relres(x, b)
         self.refinements = 0
-        while self.refinements < self.MAX_REFINE and rel.max(initial=0.0) > self.REFINE_TOL:
+        while self.refinements < self.MAX_REFINE and rel.max(initial=0.0) > self.refine_tol:
             if x.ndim == 1:
                 x = x + self._raw(r)
                 r, new = self._relres(x, b)
             else:
-                cols = np.flatnonzero(rel > self.REFINE_TOL)
+                cols = np.flatnonzero(rel > self.refine_tol)
                 x[:, cols] += self._raw(r[:, cols])
                 rc, nc = self._relres(x[:, cols], b[:, cols])
                 r[:, cols] = rc
@@ -225,6 +229,7 @@ class _Factor:
             gained = rel.max() / max(new.max(), 1e-300)
             rel = new
             if gained < 10:
+                self.refine_tol = max(self.refine_tol, 10 * float(rel.max()))
                 break
         self.last_residual = float(rel.max(initial=0.0))
         return x
@@ -636,7 +641,10 @@ class Model:
             else:
                 modes += [np.column_stack([-x[:, 1], x[:, 0]])]
             R = np.stack([m.ravel() for m in modes], axis=1)[is_fixed[self.node_dofs(nodes).ravel()]]
-            s, V = (np.linalg.svd(R)[1:] if len(R) else (np.zeros(0), np.eye(len(modes))))
+            # full_matrices only when R has fewer rows than modes (V must stay square); a full
+            # U would be (fixed DOFs)^2: 400 MB and seconds for a 7k-DOF symmetry plane
+            s, V = (np.linalg.svd(R, full_matrices=len(R) < len(modes))[1:] if len(R)
+                    else (np.zeros(0), np.eye(len(modes))))
             free = [names[np.argmax(np.abs(v))] for v in V[len(s[s > 1e-8 * max(s.max(initial=0), 1)]):]]
             if free:
                 raise InputError(f"the system is singular: nothing holds {', '.join(free)}"

@@ -312,3 +312,46 @@ def test_prescribed_array_form_and_point_forces(block3d):
     sol = m.solve(prescribed={"xmin": 0.0}, point_forces=(ids, F))
     np.testing.assert_allclose(sol.nodal_forces[m.vertex_dofs(ids)], F, atol=1e-15)
     np.testing.assert_allclose(sol.force("xmin"), -F.sum(axis=0), atol=1e-14)
+
+
+def test_refinement_only_when_asked_and_agrees(monkeypatch, block3d):
+    """PARDISO's own refinement is off; _Factor refines on K_ff only for columns above its
+    tolerance, and raises the tolerance when a step does not help."""
+    system = block3d.system({"ymin": 0.0})
+    F = np.random.default_rng(2).normal(size=(block3d.ndof, 5)) * 1e-4
+    U = system.solve(F)
+    assert system._factor.refinements == 0 and system.residual < 1e-12
+    monkeypatch.setattr(system._factor, "refine_tol", 0.0)           # force refinement
+    V = system.solve(F)
+    assert system._factor.refinements >= 1 and system.residual < 1e-12
+    assert 0.0 < system._factor.refine_tol < 1e-11                   # round-off reached: stop refining
+    np.testing.assert_allclose(V, U, atol=1e-12 * np.abs(U).max())
+    v = system.solve(F[:, 1])
+    np.testing.assert_allclose(v, U[:, 1], atol=1e-12 * np.abs(U).max())
+    assert system.solve(F[:, :0]).shape == (block3d.ndof, 0)
+
+
+def test_scipy_fallback_blocks_of_right_hand_sides(monkeypatch, block3d):
+    import sys
+
+    F = np.random.default_rng(3).normal(size=(block3d.ndof, 4)) * 1e-4
+    fast = block3d.system({"xmin": 0.0}).solve(F)
+    monkeypatch.setitem(sys.modules, "pypardiso", None)
+    slow_model = Model(block3d.mesh.p.T, block3d.mesh.t.T, block3d.layer,
+                       {"xmin": block3d.regions["xmin"]}, material="m43")
+    with pytest.warns(UserWarning, match="slow"):
+        system = slow_model.system({"xmin": 0.0})
+    assert system.backend == "scipy-splu"
+    np.testing.assert_allclose(system.solve(F), fast, atol=1e-12 * np.abs(fast).max())
+    assert system.residual < 1e-10
+
+
+def test_held_check_with_few_and_many_fixed_dofs(block3d):
+    """The rigid-mode check uses a thin SVD when many DOFs are fixed, a full one when few are."""
+    with pytest.raises(InputError, match="nothing holds"):
+        block3d.system({"xmin": (0.0, None, None)})                  # many rows, modes free
+    first = block3d.region_nodes("xmin")[:1]
+    with pytest.raises(InputError, match="nothing holds"):
+        block3d.system({"xmin": lambda x: np.where(np.all(np.isclose(x, block3d.nodes[first]), axis=1)[:, None],
+                                                    0.0, np.nan) * np.ones((1, 3))})   # 3 rows < 6 modes
+    assert block3d.system({"xmin": 0.0}).backend == "pardiso"
