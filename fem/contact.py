@@ -586,7 +586,8 @@ def run_scene(model_dir, out_dir, scene: dict, progress: bool = True) -> str:
         steps = []
         for off in offsets:
             for load in loads:
-                steps.append((off, cm.sweep(ind, off[None], **load)[0]))
+                res = cm.sweep(ind, off[None], **load)[0] if "sweep" in exp else cm.indent(ind, **load)
+                steps.append((off, res))
         runs.append((name, ind, steps, time.perf_counter() - t0))
         if progress:
             print(f"{name}: {len(steps)} indentations in {runs[-1][3]:.2f} s", flush=True)
