@@ -136,3 +136,23 @@ def test_sizing_field_is_fine_under_the_pad_and_grows_inwards_and_dorsally():
     assert h[0] == pytest.approx(0.5)
     assert h[1] == pytest.approx(0.5 + 0.5 * (3.5 - 1.5), rel=0.02)        # grows 0.5 mm per mm
     assert h[2] == pytest.approx(3.0)                                       # capped at coarse
+
+
+def test_force_rebuilds_while_a_normal_run_uses_the_cache(built, monkeypatch):
+    import fem.mesh as fm
+
+    _, cache = built
+    with np.load(next(cache.rglob("*.npz"))) as d:
+        points, tets = d["points"], d["tets"]
+    calls = []
+
+    def mesher(model, sizing):                       # stands in for pytetwild: count the calls
+        calls.append(sizing.size_mm)
+        return points, tets
+
+    monkeypatch.setattr(fm, "tetrahedralize", mesher)
+    model = model_from_args(None, "monkey", params_for("monkey"))
+    _, info = fm.build_mesh(model, fm.Sizing(size_mm=0.8))
+    assert info["cached"] and calls == []
+    _, info = fm.build_mesh(model, fm.Sizing(size_mm=0.8), force=True)
+    assert not info["cached"] and calls == [0.8]
