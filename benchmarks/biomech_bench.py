@@ -108,7 +108,7 @@ def main():
         t, c = time.perf_counter(), cpu()
         exp = DeflectionExperiment(folder)
         st = layer_study(exp, "m43338", depths_mm=(2.0,))
-        results["study"].append({"model": name, "dofs": int(exp._cache[next(iter(exp._cache))]["model"].ndof),
+        results["study"].append({"model": name, "dofs": exp.ndof,
                                  "wall_s": time.perf_counter() - t, "cpu_s": cpu() - c,
                                  "evaluations": st.evaluations, "effects": [e.__dict__ for e in st.effects]})
         exp.clear()
@@ -165,7 +165,7 @@ def main():
             p = exp.profiles(code, [1.0])[0]
             r["materials"][code] = {"deflection_mm": np.round(p.at(dist), 3).tolist(), "force_N": p.force_N,
                                     "wall_s": time.perf_counter() - t}
-        r["dofs"] = int(exp._cache[next(iter(exp._cache))]["model"].ndof)
+        r["dofs"] = exp.ndof
         results["3d"] = r
         write(out, results)
         print("3d", r, flush=True)

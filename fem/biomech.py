@@ -63,12 +63,12 @@ def moduli_MPa(log10_Pa) -> list[float]:
     return [10.0 ** (float(v) - 6.0) for v in log10_Pa]
 
 
-def _as_log10(material) -> np.ndarray:
+def _as_log10(material, n_layers: int = N_LAYERS) -> np.ndarray:
     if isinstance(material, str):
-        return parse_code(material)
+        return parse_code(material, n_layers)
     v = np.asarray(material, float).ravel()
-    if v.shape != (N_LAYERS,):
-        raise InputError(f"give {N_LAYERS} log10 moduli (Pa), one per layer, got {v.size}")
+    if v.shape != (n_layers,):
+        raise InputError(f"give {n_layers} log10 moduli (Pa), one per layer, got {v.size}")
     return v
 
 
@@ -152,11 +152,13 @@ class DeflectionExperiment:
     along z, i.e. the line load of the plane-strain section) and 'perpendicular' in 3D (thesis
     6.2.1); position_mm: (x, z) of the load, default the middle of the pad (2D: the section's
     centroid x); band_mm: 3D only, surface nodes within this distance of the profile line (the
-    line through the load across the wedge) make the profile; side: see `side_profile`.
+    line through the load across the wedge) make the profile; side: see `side_profile`;
+    max_factors: factorised models kept (least recently used dropped; their contact results stay
+    cached, only a new depth for them re-factorises) - a 3D factor can take gigabytes.
     """
 
     def __init__(self, model_dir, indentor: str = "wedge", orientation=None, position_mm=None,
-                 nu=None, band_mm: float = 0.25, side: str = "mean"):
+                 nu=None, band_mm: float = 0.25, side: str = "mean", max_factors: int = 4):
         import json
         from pathlib import Path
 
@@ -174,6 +176,7 @@ class DeflectionExperiment:
         self.dim, self.region, self.info = model.dim, region, info
         self.n_layers = len(set(model.layer.tolist()))
         sn = model.surface_nodes(region)
+        self.points_mm, self.ndof = sn.x, model.ndof     # contact candidates (ContactModel.from_fe's)
         if self.dim == 2:
             cx = info.get("params", {}).get("centroid_mm", [0.5 * (sn.x[:, 0].min() + sn.x[:, 0].max())])[0]
             pos, orient, place = (cx, 0.0), "parallel", {}
@@ -185,39 +188,47 @@ class DeflectionExperiment:
 
         self.indentor = make_indentor(indentor, orientation=orientation or orient,
                                       position_mm=tuple(position_mm) if position_mm is not None else pos, **place)
-        self._cache: dict = {}
-        self.evaluations = 0          # distinct modulus ratios solved (one factorisation each)
+        self._cache: dict = {}        # ratio key -> {"log10_Pa", "depth": {depth: ContactResult}}
+        self._solvers: dict = {}      # ratio key -> ContactModel, least recently used first
+        self.max_factors = max(1, int(max_factors))
+        self.evaluations = 0          # factorisations done (distinct modulus ratios, plus rebuilds)
 
     def _results(self, log10_Pa, depths_mm):
-        from fem.contact import ContactModel, open_model
-        from fem.materials import Material
-
         log10_Pa = np.asarray(log10_Pa, float)
         if log10_Pa.size != self.n_layers:
             raise InputError(f"the model has {self.n_layers} layers; give {self.n_layers} moduli "
                              f"(a code with {self.n_layers} digits)")
         key = ratio_key(log10_Pa)
-        entry = self._cache.get(key)
-        if entry is None:
-            nu = self.info.get("nu", 0.48) if self.nu is None else self.nu
-            model, system, region, _ = open_model(self.model_dir, material=Material(moduli_MPa(log10_Pa), nu=nu))
-            cm = ContactModel.from_fe(model, system, region)
-            entry = self._cache[key] = {"log10_Pa": log10_Pa.copy(), "cm": cm, "model": model, "depth": {}}
-            self.evaluations += 1
+        entry = self._cache.setdefault(key, {"log10_Pa": log10_Pa.copy(), "depth": {}})
         scale = 10.0 ** (log10_Pa[0] - entry["log10_Pa"][0])     # forces scale with the common factor
         out = []
         for d in depths_mm:
             d = float(d)
             if d not in entry["depth"]:
-                entry["depth"][d] = entry["cm"].indent(self.indentor, depth_mm=d)
+                entry["depth"][d] = self._solver(key, entry["log10_Pa"]).indent(self.indentor, depth_mm=d)
             out.append((entry["depth"][d], scale))
-        return entry["cm"], out
+        return out
+
+    def _solver(self, key, log10_Pa):
+        from fem.contact import ContactModel, open_model
+        from fem.materials import Material
+
+        cm = self._solvers.pop(key, None)
+        if cm is None:
+            nu = self.info.get("nu", 0.48) if self.nu is None else self.nu
+            model, system, region, _ = open_model(self.model_dir, material=Material(moduli_MPa(log10_Pa), nu=nu))
+            cm = ContactModel.from_fe(model, system, region)
+            self.evaluations += 1
+            while len(self._solvers) >= self.max_factors:
+                self._solvers.pop(next(iter(self._solvers)))
+        self._solvers[key] = cm
+        return cm
 
     def profiles(self, material, depths_mm) -> list[Profile]:
         """Deflection profiles [mm] for a material (code or (5,) log10 moduli in Pa) at depths [mm]."""
-        cm, results = self._results(_as_log10(material), depths_mm)
-        x = np.zeros((len(cm.points_mm), 3))
-        x[:, :cm.points_mm.shape[1]] = cm.points_mm
+        results = self._results(_as_log10(material, self.n_layers), depths_mm)
+        x = np.zeros((len(self.points_mm), 3))
+        x[:, :self.points_mm.shape[1]] = self.points_mm
         rel = x - self.indentor.origin_mm
         u, v = rel @ self.indentor.e1, rel @ self.indentor.e2
         on_line = np.ones(len(x), bool) if self.dim == 2 else np.abs(u) <= self.band_mm
@@ -232,12 +243,13 @@ class DeflectionExperiment:
 
     def forces_N(self, material, depths_mm) -> np.ndarray:
         """(k,) total indentation force [N; N/mm in 2D] at depths [mm] for a material."""
-        _, results = self._results(_as_log10(material), depths_mm)
+        results = self._results(_as_log10(material, self.n_layers), depths_mm)
         return np.array([scale * res.total_force_N for res, scale in results])
 
     def clear(self) -> None:
-        """Drop every cached material (its factorisation is freed with it)."""
+        """Drop every cached material and factorisation."""
         self._cache.clear()
+        self._solvers.clear()
 
 
 # --------------------------------------------------------------------------- CSV input
@@ -498,7 +510,7 @@ def fit_material(exp: DeflectionExperiment, data: list[Profile], base: str = "m4
     lo, hi = float(bounds_log10[0]), float(bounds_log10[1])
     if not lo < hi:
         raise InputError(f"bounds must be low < high (log10 Pa), got {bounds_log10}")
-    x0 = np.clip(b[idx] if start is None else _as_log10(start)[idx], lo + 1e-6, hi - 1e-6)
+    x0 = np.clip(b[idx] if start is None else _as_log10(start, exp.n_layers)[idx], lo + 1e-6, hi - 1e-6)
 
     def full(x):
         v = b.copy()

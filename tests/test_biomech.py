@@ -145,6 +145,19 @@ def test_only_modulus_ratios_matter_and_forces_scale(section):
     assert a.evaluations == 1
 
 
+def test_factorisation_cache_is_bounded(section):
+    """max_factors=1: the second material evicts the first's factorisation; the first's solved
+    depths stay cached (no re-factorisation), a new depth for it factorises again, same answer."""
+    e = DeflectionExperiment(section, max_factors=1)
+    p1 = e.profiles("m43338", [1.0])[0]
+    e.profiles("m33338", [1.0])
+    assert e.evaluations == 2 and len(e._solvers) == 1
+    assert e.profiles("m43338", [1.0])[0].deflection_mm is not None and e.evaluations == 2
+    p2 = e.profiles("m43338", [1.0, 2.0])
+    assert e.evaluations == 3
+    np.testing.assert_allclose(p2[0].deflection_mm, p1.deflection_mm)
+
+
 def test_layer_study_reuses_ratios_and_finds_thesis_trends(exp):
     """Figure 6-10 trends: a stiffer outer layer spreads the load (more deflection away from it),
     stiffer inner layers 3 and 4 lower the deflection; each layer's most affected point is
