@@ -305,15 +305,31 @@ def cache_dir() -> Path:
 
 
 def mesh_key(model: LayeredModel, sizing: Sizing) -> str:
-    """sha256 of everything the mesh depends on: model surfaces and parameters, sizing, mesher."""
+    """sha256 of everything the tets depend on: the layer surfaces (rings, z), sizing, mesher.
+    Region parameters are left out: they change the tags, not the tets."""
     import pytetwild
 
     h = hashlib.sha256()
     h.update(np.ascontiguousarray(model.rings).tobytes())
     h.update(np.ascontiguousarray(model.z_mm).tobytes())
-    h.update(json.dumps([MESHER_VERSION, asdict(model.params), asdict(sizing), pytetwild.__version__],
+    h.update(json.dumps([MESHER_VERSION, asdict(sizing), pytetwild.__version__],
                         sort_keys=True, default=str).encode())
     return h.hexdigest()
+
+
+def inputs_key(model: LayeredModel, sizing: Sizing) -> str:
+    """sha256 of everything the written files depend on: the mesh key plus every model parameter."""
+    extra = json.dumps([asdict(model.params), model.preset, model.sections_sha256], sort_keys=True, default=str)
+    return hashlib.sha256((mesh_key(model, sizing) + extra).encode()).hexdigest()
+
+
+def outputs_current(out_dir, key: str) -> bool:
+    """True if out_dir holds mesh.vtu and a model.json written for these inputs."""
+    out = Path(out_dir)
+    try:
+        return (out / "mesh.vtu").is_file() and json.loads((out / "model.json").read_text())["inputs_key"] == key
+    except (OSError, ValueError, KeyError, TypeError):
+        return False
 
 
 def build_mesh(model: LayeredModel, sizing: Sizing, force: bool = False, log=None):
@@ -353,9 +369,9 @@ def write_mesh(out_dir, model: LayeredModel, sizing: Sizing, mesh: TetMesh, rep:
     import meshio
 
     data = model.to_json()
-    data.update({"sizing": asdict(sizing), "mesh": {**rep, "cache_key": info["key"], "from_cache": info["cached"],
-                                                    "mesh_seconds": info["mesh_s"], "file": "mesh.vtu",
-                                                    "cells": "tetra (linear, positive orientation)"}})
+    data.update({"inputs_key": inputs_key(model, sizing), "sizing": asdict(sizing),
+                 "mesh": {**rep, "cache_key": info["key"], "from_cache": info["cached"], "mesh_seconds": info["mesh_s"],
+                          "file": "mesh.vtu", "cells": "tetra (linear, positive orientation)"}})
     with staged_output(out_dir) as tmp:
         meshio.write(tmp / "mesh.vtu", mesh.to_meshio())
         write_json(tmp / "model.json", data)
@@ -386,7 +402,11 @@ def summary(rep: dict, info: dict, out_dir) -> str:
 
 
 def run_mesh(out_dir, model: LayeredModel, sizing: Sizing, force: bool = False, progress: bool = True):
-    """Build (or load), check and write the mesh of `model`; returns (TetMesh, report, info)."""
+    """Build (or load), check and write the mesh of `model`; returns (TetMesh, report, info), or
+    None when out_dir already holds the outputs of these inputs (and not force)."""
+    sizing.check()
+    if not force and outputs_current(out_dir, inputs_key(model, sizing)):
+        return None
     log = (lambda m: print(m, file=sys.stderr, flush=True)) if progress else None
     mesh, info = build_mesh(model, sizing, force=force, log=log)
     rep = report(model, mesh, sizing)

@@ -64,8 +64,10 @@ def run_mesh_command(args) -> str:
                             tip_width_frac=args.tip_width_frac)
     sizing = Sizing(**_given(size_mm=args.size, coarse_mm=args.coarse, growth=args.growth,
                              fine_depth_mm=args.fine_depth))
-    _, rep, info = run_mesh(args.out, model, sizing, force=args.force, progress=not args.quiet)
-    return summary(rep, info, args.out)
+    done = run_mesh(args.out, model, sizing, force=args.force, progress=not args.quiet)
+    if done is None:
+        return f"{args.out}: mesh.vtu and model.json are current for these inputs (use --force to redo)"
+    return summary(done[1], done[2], args.out)
 
 
 def _given(**kw):

@@ -156,3 +156,16 @@ def test_force_rebuilds_while_a_normal_run_uses_the_cache(built, monkeypatch):
     assert info["cached"] and calls == []
     _, info = fm.build_mesh(model, fm.Sizing(size_mm=0.8), force=True)
     assert not info["cached"] and calls == [0.8]
+
+
+def test_rerun_skips_current_outputs_and_region_changes_reuse_the_tets(built, tmp_path):
+    out, _ = built
+    stamp = [(out / f).stat().st_mtime_ns for f in ("mesh.vtu", "model.json")]
+    assert pipeline.main([*ARGS, "--out", str(out)]) == 0
+    assert [(out / f).stat().st_mtime_ns for f in ("mesh.vtu", "model.json")] == stamp   # skipped
+    narrow = tmp_path / "narrow"
+    assert pipeline.main([*ARGS, "--nail-span", "60", "--out", str(narrow)]) == 0
+    m1, _ = load(out)
+    m2, info2 = load(narrow)
+    assert info2["mesh"]["from_cache"] is True                     # same tets, new tags
+    assert 0 < m2.point_data["nail"].sum() < m1.point_data["nail"].sum()
