@@ -43,46 +43,47 @@ def mesh(folder, preset, z, size):
     return folder
 
 
+def _table(title, header, rows, note=None):
+    """Markdown section: title, optional note, a table with the given header and rows (lists)."""
+    out = [f"## {title}", ""] + ([note, ""] if note else [])
+    out += ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    return out + ["| " + " | ".join(str(c) for c in r) + " |" for r in rows] + [""]
+
+
 def write(out, results):
     (out / "biomech_bench.json").write_text(json.dumps(results, indent=1))
     lines = ["# Biomechanical verification benchmark", "",
              "2D five-layer cross-sections of the parametric models (`mesh --section-z`), 2 shared cores.", ""]
     if "study" in results:
-        lines += ["## (a) Layer study around m43338, wedge 2 mm (thesis fig. 6-10)", "",
-                  "| model | DOFs | wall s | CPU s | ratios solved | layer: most affected mm (stiffer layer: deflection change mm) |",
-                  "|---|---|---|---|---|---|"]
-        for r in results["study"]:
-            eff = "; ".join(f"{e['layer']}: {e['most_affected_mm']:.2f} ({e['difference_mm']:+.2f})" for e in r["effects"])
-            lines.append(f"| {r['model']} | {r['dofs']} | {r['wall_s']:.1f} | {r['cpu_s']:.1f} | {r['evaluations']} | {eff} |")
-        lines.append("")
+        rows = [[r["model"], r["dofs"], f"{r['wall_s']:.1f}", f"{r['cpu_s']:.1f}", r["evaluations"],
+                 "; ".join(f"{e['layer']}: {e['most_affected_mm']:.2f} ({e['difference_mm']:+.2f})" for e in r["effects"])]
+                for r in results["study"]]
+        lines += _table("(a) Layer study around m43338, wedge 2 mm (thesis fig. 6-10)",
+                        ["model", "DOFs", "wall s", "CPU s", "ratios solved",
+                         "layer: most affected mm (stiffer layer: deflection change mm)"], rows)
     if "fit" in results:
-        lines += ["## (b) Fit recovery (5 um noise, depths 1 and 2 mm, layers 2-4 free, start m43338)", "",
-                  "| model | true log10 Pa | fitted | error / sigma | factor (10^sigma) | rms mm | ratios solved | wall s |",
-                  "|---|---|---|---|---|---|---|---|"]
-        for r in results["fit"]:
-            lines.append(f"| {r['model']} | {r['truth']} | {r['fitted']} | {r['error_over_sigma']} | {r['factor']} | "
-                         f"{r['rms_mm']:.4f} | {r['evaluations']} | {r['wall_s']:.1f} |")
-        lines.append("")
+        rows = [[r["model"], r["truth"], r["fitted"], r["error_over_sigma"], r["factor"], f"{r['rms_mm']:.4f}",
+                 r["evaluations"], f"{r['wall_s']:.1f}"] for r in results["fit"]]
+        lines += _table("(b) Fit recovery (5 um noise, depths 1 and 2 mm, layers 2-4 free, start m43338)",
+                        ["model", "true log10 Pa", "fitted", "error / sigma", "factor (10^sigma)", "rms mm",
+                         "ratios solved", "wall s"], rows)
     if "nonlinear" in results:
-        lines += ["## (c) Large deformation vs linear, prescribed line load (0.25 mm patch), m43338", "",
-                  "| model | depth mm | force nonlinear / linear | max profile difference / depth | Newton its (last step) | wall s |",
-                  "|---|---|---|---|---|---|"]
+        rows = []
         for r in results["nonlinear"]:
             for k, d in enumerate(r["depths_mm"][:len(r["force_ratio"])]):
-                if str(d) in r["failed"]:
-                    lines.append(f"| {r['model']} | {d} | failed: {r['failed'][str(d)]} | | | |")
-                else:
-                    lines.append(f"| {r['model']} | {d} | {r['force_ratio'][k]:.4f} | {r['max_difference'][k]:.4f} | "
-                                 f"{r['newton'][k]} | {r['wall_s'][k]:.1f} |")
-        lines.append("")
+                rows.append([r["model"], d, f"failed: {r['failed'][str(d)]}", "", "", ""] if str(d) in r["failed"] else
+                            [r["model"], d, f"{r['force_ratio'][k]:.4f}", f"{r['max_difference'][k]:.4f}",
+                             r["newton"][k], f"{r['wall_s'][k]:.1f}"])
+        lines += _table("(c) Large deformation vs linear, prescribed line load (0.25 mm patch), m43338",
+                        ["model", "depth mm", "force nonlinear / linear", "max profile difference / depth",
+                         "Newton its (last step)", "wall s"], rows)
     if "3d" in results:
         r = results["3d"]
-        lines += ["## (d) 3D coarse monkey fingertip, wedge perpendicular to the axis, 1 mm", "",
-                  f"{r['dofs']} DOFs; deflection (mm) at distances {r['distance_mm']} mm from the load:", "",
-                  "| material | deflection | force N | wall s |", "|---|---|---|---|"]
-        for code, v in r["materials"].items():
-            lines.append(f"| {code} | {v['deflection_mm']} | {v['force_N']:.4g} | {v['wall_s']:.1f} |")
-        lines.append("")
+        lines += _table("(d) 3D coarse monkey fingertip, wedge perpendicular to the axis, 1 mm",
+                        ["material", "deflection", "force N", "wall s"],
+                        [[c, v["deflection_mm"], f"{v['force_N']:.4g}", f"{v['wall_s']:.1f}"]
+                         for c, v in r["materials"].items()],
+                        f"{r['dofs']} DOFs; deflection (mm) at distances {r['distance_mm']} mm from the load:")
     (out / "biomech_bench.md").write_text("\n".join(lines))
 
 
