@@ -695,10 +695,13 @@ def _plots(folder, name, ind, steps, sn, x3, sampler, measures, rows):
     # receptor measures: profile across the pad (last step) or against the sweep position
     g = sampler.grid
     fig, axes = plt.subplots(len(measures), 1, figsize=(8, 2.2 * len(measures)), sharex=True, squeeze=False)
-    site_v = (np.pad(g.sites_mm, ((0, 0), (0, 3 - g.sites_mm.shape[1]))) - ind.origin_mm) @ ind.e2
+    site_x = np.pad(g.sites_mm, ((0, 0), (0, 3 - g.sites_mm.shape[1]))) - ind.origin_mm
+    site_u, site_v = site_x @ ind.e1, site_x @ ind.e2
+    # a pad grid in 3D: only the sites on the indentor's centre line (within 0.5 mm, or the nearest)
+    on_line = np.abs(site_u) <= max(0.5, np.abs(site_u).min() + 1e-9)
     for m, a in zip(measures, axes[:, 0]):
         for d in np.unique(g.depth_mm):
-            sel = g.depth_mm == d
+            sel = (g.depth_mm == d) & on_line[g.site]
             if sweep:
                 j = np.flatnonzero(sel)[np.argmin(np.abs(site_v[g.site[sel]]))]
                 vals = [sampler.measures(r.observed, [m])[m][j] for _, r in steps]
@@ -709,7 +712,7 @@ def _plots(folder, name, ind, steps, sn, x3, sampler, measures, rows):
                 a.plot(site_v[g.site[sel]][o], vals[o], ".-", label=f"{d:g} mm")
         a.set_ylabel(m, fontsize=8)
         a.legend(fontsize=7)
-    axes[-1, 0].set_xlabel(key if sweep else "receptor site across the indentor, mm")
+    axes[-1, 0].set_xlabel(key if sweep else "receptor site across the indentor (on its centre line), mm")
     fig.tight_layout()
     fig.savefig(folder / f"{name}_receptors.png", dpi=110)
     plt.close(fig)
