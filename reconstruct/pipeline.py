@@ -13,7 +13,7 @@ from reconstruct.calibrate import Frame, estimate_axis, sample_borders, template
 from reconstruct.errors import InputError
 from reconstruct.io import staged_output, write_json
 from reconstruct.sections import (N_POINTS, choose_levels, convex_section, fit_support, harmonics_for,
-                                  support_curve, support_samples, tangent_polygon, _design)
+                                  support_curve, support_samples, support_values, tangent_polygon)
 from reconstruct.silhouette import Borders, extract_borders
 from reconstruct.surface import loft
 from reconstruct.turntable import Turntable, load_turntable
@@ -168,7 +168,7 @@ def reconstruct(table: Turntable, spacing_mm=(0.5, 2.0), tol_mm: float = 0.02,
     k_max = harmonics_for(phi)
     coef_fine = fit_support(phi, h, k_max)
     dirs = np.linspace(0, 2 * np.pi, 180, endpoint=False)
-    levels = choose_levels(s_fine[inside], (_design(dirs, k_max) @ coef_fine).T, spacing_mm, tol_mm)
+    levels = choose_levels(s_fine[inside], support_values(coef_fine, dirs), spacing_mm, tol_mm)
     left_l, right_l = sample_borders(views, frame, levels)
     phi, h_l = support_samples(left_l, right_l, theta)
     curves = support_curve(fit_support(phi, h_l, k_max), N_POINTS)

@@ -66,6 +66,11 @@ def fit_support(phi: np.ndarray, h: np.ndarray, k_max: int, smooth: float = 1e-9
     return np.linalg.solve(a.T @ a + np.diag(penalty), a.T @ h)
 
 
+def support_values(coef: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    """(m, len(phi)) support function of m sections (coefficients (2K+1, m)) in directions phi."""
+    return (_design(phi, (coef.shape[0] - 1) // 2) @ coef).T
+
+
 def support_curve(coef: np.ndarray, n_points: int = N_POINTS) -> np.ndarray:
     """(m, n_points, 2) closed CCW curves from support-function coefficients (2K+1, m)."""
     k_max = (coef.shape[0] - 1) // 2
