@@ -4,7 +4,10 @@ Receptors sit 0.5-1.0 mm below the skin (Merkel cells 0.75 mm typical), about 1 
 (SPEC.md section 5). A grid is a set of surface sites (nodes of the contact region thinned to a
 spacing, or those along a line) each repeated at every depth along the inward surface normal.
 Fields are sampled in the element that holds each point (the solver's point operators), so
-nothing is averaged across a layer interface.
+nothing is averaged across a layer interface. A receptor within INTERFACE_SNAP_MM of a layer
+interface of the mesh (the default 0.5 mm depth is the epidermis thickness, and meshes place
+interfaces only to about 0.02 mm) is sampled in the deeper layer, moved along its normal by at
+most INTERFACE_SNAP_MM (`ReceptorSampler.shift_mm`), so neighbouring receptors agree on a side.
 
     grid = receptor_grid(sn.x, sn.normal, depths_mm=(0.5, 0.75, 1.0), spacing_mm=1.0)
     sampler = ReceptorSampler(model, grid)            # sampler.operator: sparse (r, ndof)
@@ -21,6 +24,9 @@ from fem.measures import State, check_names, evaluate
 from reconstruct.errors import InputError
 
 DEFAULT_DEPTHS_MM = (0.5, 0.75, 1.0)
+INTERFACE_SNAP_MM = 0.03
+"""Receptors this close to a mesh layer interface are sampled in the deeper layer (mm); larger
+than the 0.013 mm by which pytetwild's interfaces were measured to stray from the model shells."""
 DEFAULT_MEASURES = ("sed_MPa", "max_compressive_strain", "max_shear_strain", "strain_yy")
 
 
@@ -73,7 +79,7 @@ class ReceptorSampler:
     (r, ndof) matrix `operator` (displacement, strain, stress), and measures from its output."""
 
     def __init__(self, model, grid: ReceptorGrid):
-        pts = grid.points_mm
+        pts, self.shift_mm = _off_interfaces(model, grid)
         self.dim, self.n = model.dim, len(pts)
         blocks = [model.displacement_operator(pts), model.strain_operator(pts), model.stress_operator(pts)]
         self.sizes = [b.shape[0] for b in blocks]
@@ -97,6 +103,32 @@ class ReceptorSampler:
     def measures(self, values, names=DEFAULT_MEASURES) -> dict[str, np.ndarray]:
         """{name: (n,) values at the receptor points}."""
         return evaluate(check_names(names), self.state(values))
+
+
+def _off_interfaces(model, grid: ReceptorGrid, snap_mm: float = INTERFACE_SNAP_MM):
+    """Receptor points (n, dim) with those near a layer interface moved into the deeper layer,
+    and the shift of each (n,) in mm (0 for most)."""
+    pts = np.array(grid.points_mm, dtype=float)     # a copy: the grid keeps the placed points
+    shift = np.zeros(len(pts))
+    ok = grid.depth_mm > snap_mm
+    normal = np.zeros_like(pts)                     # outward unit normal of each receptor's site
+    normal[ok] = (grid.sites_mm[grid.site[ok]] - pts[ok]) / grid.depth_mm[ok, None]
+
+    def layer_at(x):
+        return model.layer[model.locate(x)]
+
+    idx = np.flatnonzero(ok)
+    deep = layer_at(pts[idx] - snap_mm * normal[idx])
+    near = np.flatnonzero(deep != layer_at(pts[idx] + snap_mm * normal[idx]))
+    idx, deep = idx[near], deep[near]
+    for step in np.linspace(0.0, snap_mm, 7):       # the smallest move that lands in the deeper layer
+        if not len(idx):
+            break
+        moved = pts[idx] - step * normal[idx]
+        done = layer_at(moved) == deep
+        pts[idx[done]], shift[idx[done]] = moved[done], step
+        idx, deep = idx[~done], deep[~done]
+    return pts, shift
 
 
 def _sym(comp, rows, cols):
