@@ -15,6 +15,7 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+from PIL import Image
 
 from reconstruct.errors import InputError
 
@@ -114,11 +115,13 @@ def load_turntable(folder) -> Turntable:
                          f"remove the duplicate images or fix the angles")
 
     sizes = {}
-    for p in views + calib:
-        img = cv2.imread(str(p), cv2.IMREAD_UNCHANGED)
-        if img is None:
-            raise InputError(f"cannot read image '{p}': replace or remove the file")
-        sizes.setdefault((img.shape[1], img.shape[0]), []).append(p.name)
+    for p in views + calib:                  # headers only: the pixels are decoded once, later
+        try:
+            with Image.open(p) as img:
+                size = img.size
+        except (OSError, ValueError):
+            raise InputError(f"cannot read image '{p}': replace or remove the file") from None
+        sizes.setdefault(size, []).append(p.name)
     if len(sizes) > 1:
         desc = "; ".join(f"{w}x{h}: {', '.join(n[:2])}{' ...' if len(n) > 2 else ''}"
                          for (w, h), n in sizes.items())
