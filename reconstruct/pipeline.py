@@ -35,6 +35,7 @@ class Reconstruction:
     trims: dict
     axis_fit: dict
     timings_s: dict
+    turned_180: bool = False              # the rod entered from the top: images were turned
     warnings: list[str] = field(default_factory=list)
 
     def summary(self) -> str:
@@ -138,7 +139,8 @@ def reconstruct(table: Turntable, spacing_mm=(0.5, 2.0), tol_mm: float = 0.02,
     height_px, width_px = table.shape_px
     top = sum(b.touches_top for b in views)
     bottom = sum(b.touches_bottom for b in views)
-    if top > bottom:                          # rod enters from the top: turn everything by 180 deg
+    turned = top > bottom                     # rod enters from the top: turn everything by 180 deg
+    if turned:
         views = [_rotate180(b, width_px) for b in views]
         calib = _rotate180(calib, width_px)
     rod = max(top, bottom) > len(views) // 2
@@ -178,7 +180,7 @@ def reconstruct(table: Turntable, spacing_mm=(0.5, 2.0), tol_mm: float = 0.02,
     surface = loft(z, sections)
     timings["sections"] = time.perf_counter() - t0
     return Reconstruction(table, frame, z, sections, polygons, surface, s_lo, trims, axis_fit,
-                          timings, warnings)
+                          timings, turned, warnings)
 
 
 def sections_document(rec: Reconstruction) -> dict:

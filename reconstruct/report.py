@@ -18,10 +18,9 @@ def write_report(rec, path) -> None:
     t, fr = rec.table, rec.frame
     i = int(np.argmin(np.abs(np.mod(t.angles_deg - t.volar_view_deg + 180, 360) - 180)))
     img = t.read(t.image_paths[i])
+    if rec.turned_180:                               # show it as the stage saw it
+        img = np.ascontiguousarray(img[::-1, ::-1])
     b = extract_borders(img, t.image_paths[i].name)
-    if b.touches_top and not b.touches_bottom:       # the stage turned the images: show it turned
-        img = img[::-1, ::-1]
-        b = extract_borders(img, t.image_paths[i].name)
 
     fig, ax = plt.subplots(2, 3, figsize=(15, 9.5))
     a = ax[0, 0]
@@ -40,7 +39,8 @@ def write_report(rec, path) -> None:
     a.hist(img.ravel(), bins=256, range=(0, 256), color="0.3", log=True)
     a.axvline(b.threshold, color="b", label=f"Otsu level {b.threshold:.0f}")
     a.axvline(0.5 * (b.background + b.object), color="r", ls="--",
-              label=f"50 % level (median bg {b.background:.0f}, object {b.object:.0f}; local in the image)")
+              label=f"50 % level at the centre (background {b.background:.0f}, object {b.object:.0f}; "
+                    f"it follows the lighting across the image)")
     a.set_xlabel("grey level"), a.set_ylabel("pixels"), a.legend(fontsize=7)
     a.set_title("grey-level histogram of that view", fontsize=9)
 

@@ -28,7 +28,8 @@ class Borders:
     left_px, right_px: (H,) sub-pixel column of the outermost left/right 0.5 crossing; NaN on
     rows without object. frame_rows: (H,) bool, the object touches the left or right image
     edge on that row. touches_top / touches_bottom: the object reaches that image edge.
-    threshold: Otsu level (grey); background, object: median grey levels (for the report).
+    threshold: Otsu level (grey); background, object: grey levels of the lighting model at the
+    image centre (for the report).
     """
 
     left_px: np.ndarray
