@@ -93,10 +93,10 @@ class NeoHookean2D:
         self.dx = scalar.dx                                                              # (M, nq)
         # the linear solver's layer-discontinuous P1 pressure basis and lumped 1/kappa mass (same
         # element order and quadrature): its small-strain limit is then Model's discretisation
-        pb = model._pbasis
+        pb = model.pressure_basis
         self.q = np.array([np.asarray(pb.basis[c][0]) for c in range(pb.Nbfun)])              # (3, M, nq)
         self.pdofs = pb.element_dofs                                                      # (3, M)
-        self.D = model._D
+        self.D = model.pressure_compliance
         self.udofs = model.basis.element_dofs                                             # (nb*2, M)
         self.mu = model.mu[:, None]
         self.ndof, self.np_ = model.ndof, pb.N

@@ -469,7 +469,7 @@ class Model:
 
     # ------------------------------------------------------------------ assembly
     @cached_property
-    def _pbasis(self) -> Basis:
+    def pressure_basis(self) -> Basis:
         """P1 pressure basis, continuous within a layer, discontinuous across layers: built on a
         copy of the mesh whose interface vertices are duplicated per layer (same element order)."""
         key = self.mesh.t * (self.layer.max() + 1) + self.layer       # (vertex, layer) pairs
@@ -485,20 +485,20 @@ class Model:
         return self.lam + 2.0 * self.mu / self.dim
 
     @cached_property
-    def _D(self) -> np.ndarray:
+    def pressure_compliance(self) -> np.ndarray:
         """(npressure,) lumped P1 mass weighted by 1 / kappa [mm^3 / MPa]."""
         nqp = self.basis.X.shape[1]
-        return asm(_lumped_compliance, self._pbasis, kappa=np.repeat(self._kappa[:, None], nqp, axis=1))
+        return asm(_lumped_compliance, self.pressure_basis, kappa=np.repeat(self._kappa[:, None], nqp, axis=1))
 
     @cached_property
     def _B(self) -> sp.csr_matrix:
         """(npressure, ndof): int q_i div u."""
-        return asm(_divergence, self.basis, self._pbasis).tocsr()
+        return asm(_divergence, self.basis, self.pressure_basis).tocsr()
 
     @cached_property
     def _pressure(self) -> sp.csr_matrix:
         """(npressure, ndof): nodal pressure (mean-stress-like) p = D^-1 B u [MPa]."""
-        return (sp.diags(1.0 / self._D) @ self._B).tocsr()
+        return (sp.diags(1.0 / self.pressure_compliance) @ self._B).tocsr()
 
     @cached_property
     def K_dev(self) -> sp.csr_matrix:
@@ -658,7 +658,8 @@ class Model:
         if key not in self._factors:
             self._check_held(fixed)
             free = np.setdiff1d(np.arange(self.ndof), fixed)
-            self._factors = {key: _Factor(self.K_dev[free][:, free], self._B[:, free], self._D)}  # keep one
+            self._factors = {key: _Factor(self.K_dev[free][:, free], self._B[:, free],     # keep one
+                                          self.pressure_compliance)}
         return LinearSystem(self, fixed, values, self._factors[key])
 
     def solve(self, prescribed=None, tractions=None, pressures=None, forces=None, point_forces=None,
@@ -737,8 +738,8 @@ class Model:
         eps = 0.5 * (grad + grad.transpose(0, 2, 1, 3))
         dev = eps - np.einsum("kiin->kn", eps)[:, None, None] / d * np.eye(d)[None, :, :, None]
         lam = np.vstack([1.0 - self._reference(x, cells).sum(axis=0), self._reference(x, cells)])   # P1 values
-        P1 = sp.csr_matrix((lam.ravel(), (np.tile(np.arange(n), d + 1), self._pbasis.element_dofs[:, cells].ravel())),
-                           shape=(n, self._pbasis.N))
+        pdofs = self.pressure_basis.element_dofs[:, cells].ravel()
+        P1 = sp.csr_matrix((lam.ravel(), (np.tile(np.arange(n), d + 1), pdofs)), shape=(n, self.pressure_basis.N))
         vol = (sp.diags(1.0 / (d * self._kappa[cells])) @ P1 @ self._pressure).tocoo()   # theta_bar / d
         comps = [(_INDEX[c[0]], _INDEX[c[1]]) for c in STRAIN_COMPONENTS[d]]
         ncomp = len(comps)
@@ -829,7 +830,7 @@ class Solution:
         eps = 0.5 * (g + g.transpose(0, 2, 1))
         X = m._reference(x, cells)
         p1 = np.vstack([1.0 - X.sum(axis=0), X])                          # P1 pressure shape values
-        theta_bar = (p1 * (m._pressure @ self.u)[m._pbasis.element_dofs[:, cells]]).sum(axis=0) / m._kappa[cells]
+        theta_bar = (p1 * (m._pressure @ self.u)[m.pressure_basis.element_dofs[:, cells]]).sum(axis=0) / m._kappa[cells]
         eps += ((theta_bar - np.trace(eps, axis1=1, axis2=2)) / d)[:, None, None] * np.eye(d)
         strain = np.zeros((n, 3, 3))
         strain[:, :d, :d] = eps
