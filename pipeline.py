@@ -118,7 +118,8 @@ def _add_mesh(sub):
     p.add_argument("--epidermis", type=float, help="epidermis thickness in mm (default 0.5)")
     p.add_argument("--dermis", type=float, help="dermis thickness in mm (default 1.0)")
     p.add_argument("--layer3", type=float, help="layer 3 volar thickness at the reference sections in mm; "
-                                                 "sets the thesis scale factor (default human 1.5, monkey 0.55)")
+                                                 "sets the thesis scale factor (default: presets human 1.5, monkey 0.55; "
+                                                 "sections.json by section width, see model.json size_defaults)")
     p.add_argument("--layer3-scale", type=float, help="give the layer-3 scale factor f3 directly (0-1; "
                                                        "overrides --layer3)")
     p.add_argument("--bone-diameter", type=float, help="bone width at the middle reference section in mm "
@@ -126,7 +127,7 @@ def _add_mesh(sub):
     p.add_argument("--bone-profile", help="bone width / section width along the length, 's:ratio,...' with "
                                           "s in [0, 1] from proximal to distal, e.g. 0:0.25,1:0.18")
     p.add_argument("--bone-offset", type=float, help="bone shift towards the nail (-y) in mm "
-                                                      "(default human 1.0, monkey 0.15)")
+                                                      "(default: presets human 1.0, monkey 0.15; sections.json by width)")
     p.add_argument("--nail-span", type=float, help="nail region angular span in deg (default 120)")
     p.add_argument("--nail-z", type=float, nargs=2, metavar=("LO", "HI"),
                    help="nail region as fractions of the length (default 0.3 1.0)")

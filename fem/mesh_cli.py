@@ -57,7 +57,7 @@ def run_mesh_command(args) -> str:
                 raise InputError(f"--preset {args.preset} is a 2D model: give no sections folder")
             domain = mesh2d.preset_domain(args.preset, bone=args.bone)
         _, rep = mesh2d.run_mesh2d(args.out, domain, sizing, progress=not args.quiet)
-        return mesh2d.summary(rep, args.out)
+        return mesh2d.summary(rep, args.out) + (size_note(model) if args.section_z is not None else "")
     from fem.mesh import Sizing, run_mesh, summary
 
     model = model_from_args(args.source, args.preset, model_params(args), z_range_mm=_tuple(args.z_range),
@@ -66,8 +66,17 @@ def run_mesh_command(args) -> str:
                              fine_depth_mm=args.fine_depth))
     done = run_mesh(args.out, model, sizing, force=args.force, progress=not args.quiet)
     if done is None:
-        return f"{args.out}: mesh.vtu and model.json are current for these inputs (use --force to redo)"
-    return summary(done[1], done[2], args.out)
+        return f"{args.out}: mesh.vtu and model.json are current for these inputs (use --force to redo)" + size_note(model)
+    return summary(done[1], done[2], args.out) + size_note(model)
+
+
+def size_note(model) -> str:
+    """A summary line naming the parameters chosen by section size ('' when all were given)."""
+    sd = model.derived["size_defaults"]
+    if not sd["chosen"]:
+        return ""
+    return (f"\n  by section size (middle width {sd['middle_width_mm']:.2f} mm): "
+            + ", ".join(f"{k} {v:g}" for k, v in sd["chosen"].items()) + " (flags override)")
 
 
 def _given(**kw):

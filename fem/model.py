@@ -25,12 +25,19 @@ import numpy as np
 from reconstruct.errors import InputError
 
 N_LAYERS = 5
-#: Per-preset defaults that differ from ModelParams (the monkey section is too thin for the human
-#: layer-3 thickness and bone offset: its dorsal half-height is 2.5 mm).
+#: Per-preset layer-3 thickness and bone offset (not in the thesis; the monkey section is too thin
+#: for the human values: its dorsal half-height is 2.5 mm, the human's 5.0 mm).
 PRESET_PARAMS = {
     "human": dict(layer3_mm=1.5, bone_offset_mm=1.0),
     "monkey": dict(layer3_mm=0.55, bone_offset_mm=0.15),
 }
+#: Middle-section width (mm) of each preset's sections (SPEC: human about 16, monkey about 8 mm wide;
+#: the presets taper to 17.12 and 8.56 mm at the middle reference section).
+PRESET_MIDDLE_WIDTH_MM = {"human": 17.12, "monkey": 8.56}
+SIZED_PARAMS = ("layer3_mm", "bone_offset_mm")
+SIZE_RULE = ("parameters not given: linear in the middle-section width between the presets "
+             + ", ".join(f"{k} ({PRESET_MIDDLE_WIDTH_MM[k]} mm: {PRESET_PARAMS[k]})" for k in ("monkey", "human"))
+             + "; the nearer preset's values outside")
 
 
 def check_positive(obj, *names: str) -> None:
@@ -46,7 +53,8 @@ class ModelParams:
 
     layer3_mm: thickness of layer 3 on the volar side at the three reference sections; it sets
         the thesis scale factor f3 = (epidermis + dermis + layer3) / volar half-thickness (mean of
-        the sections at 25, 50, 75 % of the length), then used for every section.
+        the sections at 25, 50, 75 % of the length), then used for every section. None: chosen by
+        the section size (`size_defaults`), as is bone_offset_mm.
     layer3_scale: give f3 directly instead (overrides layer3_mm).
     bone_profile: ((s, ratio), ...) with s = (z - z0) / (z1 - z0) in [0, 1] and ratio = bone width
         / section width, linearly interpolated; None: a constant ratio giving bone_diameter_mm at
@@ -61,11 +69,11 @@ class ModelParams:
 
     epidermis_mm: float = 0.5
     dermis_mm: float = 1.0
-    layer3_mm: float = 1.5
+    layer3_mm: float | None = None
     layer3_scale: float | None = None
     bone_diameter_mm: float = 2.0
     bone_profile: tuple | None = None
-    bone_offset_mm: float = 1.0
+    bone_offset_mm: float | None = None
     nail_span_deg: float = 120.0
     nail_z_frac: tuple = (0.3, 1.0)
     support_span_deg: float = 90.0
@@ -76,8 +84,10 @@ class ModelParams:
 
     def check(self) -> None:
         """Raise InputError for impossible values."""
-        check_positive(self, "epidermis_mm", "dermis_mm", "layer3_mm", "bone_diameter_mm")
-        if self.bone_offset_mm < 0:
+        check_positive(self, "epidermis_mm", "dermis_mm", "bone_diameter_mm")
+        if self.layer3_mm is not None:
+            check_positive(self, "layer3_mm")
+        if self.bone_offset_mm is not None and self.bone_offset_mm < 0:
             raise InputError(f"bone_offset_mm must be >= 0 (towards the nail, -y); got {self.bone_offset_mm}")
         if self.layer3_scale is not None and not 0 < self.layer3_scale < 1:
             raise InputError(f"layer3_scale must be in (0, 1); got {self.layer3_scale}")
@@ -216,6 +226,7 @@ class LayeredModel:
             "reference_sections_z_mm": self.derived["ref_z"],
             "bone_ratio_range": [float(min(self.derived["bone_ratio"])), float(max(self.derived["bone_ratio"]))],
             "bone_diameter_range_mm": self.derived["bone_width_range"],
+            "size_defaults": {**self.derived["size_defaults"], "rule": SIZE_RULE},
             "min_layer_thickness_mm": self.derived["min_thickness"],
             "model_layer_volumes_mm3": [float(v) for v in self.layer_volumes_mm3()],
             "material": "m43338", "nu": 0.48,
@@ -345,6 +356,12 @@ def build_model(z_mm, polygons, params: ModelParams = ModelParams(), preset: str
         raise InputError("section z values must be strictly increasing (sort them, remove duplicates)")
     polys = [check_polygon(p, f"section at z={zi:g} mm") for zi, p in zip(z, polygons)]
     N = params.n_theta
+    ref_z = [float(np.interp(f, [0, 1], [z[0], z[-1]])) for f in (0.25, 0.5, 0.75)]
+    middle_width = float(np.interp(ref_z[1], z, [np.ptp(p[:, 0]) for p in polys]))
+    unset = [k for k in SIZED_PARAMS if getattr(params, k) is None
+             and not (k == "layer3_mm" and params.layer3_scale is not None)]
+    chosen = {k: v for k, v in size_defaults(middle_width).items() if k in unset}
+    params = replace(params, **chosen)
     theta = 2 * np.pi * np.arange(N) / N
     u = np.column_stack([np.cos(theta), np.sin(theta)])
     skin = (0.0, params.epidermis_mm, params.epidermis_mm + params.dermis_mm)
@@ -360,7 +377,6 @@ def build_model(z_mm, polygons, params: ModelParams = ModelParams(), preset: str
             rings[k, i] = c + t[:, None] * u
     # thesis scaling: f3 = thickness / section thickness at three reference sections
     r0 = np.linalg.norm(rings[:, 0] - cents[:, None], axis=-1)                 # (K, N)
-    ref_z = [float(np.interp(f, [0, 1], [z[0], z[-1]])) for f in (0.25, 0.5, 0.75)]
     volar = N // 4                                                            # ray towards +y
     volar_thick = np.array([np.interp(zr, z, r0[:, volar]) for zr in ref_z])
     if params.layer3_scale is not None:
@@ -385,11 +401,22 @@ def build_model(z_mm, polygons, params: ModelParams = ModelParams(), preset: str
     derived = {"f3": f3, "ref_z": ref_z, "bone_ratio": ratio.tolist(),
                "bone_shift": [shift.tolist()] * K,
                "bone_width_range": [float((ratio * width).min()), float((ratio * width).max())],
-               "min_thickness": min_thick}
+               "min_thickness": min_thick,
+               "size_defaults": {"middle_width_mm": middle_width, "chosen": chosen}}
     return LayeredModel(z, rings, cents, params, preset, sections_sha256, derived)
 
 
 def _centroid(p: np.ndarray) -> np.ndarray:
+def size_defaults(middle_width_mm: float) -> dict:
+    """{layer3_mm, bone_offset_mm} for sections of this width (mm) at the middle reference section:
+    linear in the width between the monkey and human presets' values at their middle widths
+    (PRESET_MIDDLE_WIDTH_MM), the nearer preset's values outside that range."""
+    lo, hi = PRESET_MIDDLE_WIDTH_MM["monkey"], PRESET_MIDDLE_WIDTH_MM["human"]
+    t = float(np.clip((middle_width_mm - lo) / (hi - lo), 0.0, 1.0))
+    return {k: round((1 - t) * PRESET_PARAMS["monkey"][k] + t * PRESET_PARAMS["human"][k], 3)
+            for k in SIZED_PARAMS}
+
+
     x, y = p[:, 0], p[:, 1]
     cr = x * np.roll(y, -1) - np.roll(x, -1) * y
     a = cr.sum() / 2

@@ -10,6 +10,7 @@ import pytest
 import pipeline
 from fem.mesh import boundary_faces, label_tets, quality, straddle_check, tet_volumes
 from fem.model import model_from_args, params_for
+from reconstruct.errors import InputError
 
 ARGS = ["mesh", "--preset", "monkey", "--size", "0.8", "--quiet"]
 
@@ -169,3 +170,25 @@ def test_rerun_skips_current_outputs_and_region_changes_reuse_the_tets(built, tm
     m2, info2 = load(narrow)
     assert info2["mesh"]["from_cache"] is True                     # same tets, new tags
     assert 0 < m2.point_data["nail"].sum() < m1.point_data["nail"].sum()
+
+
+def test_monkey_size_sections_json_meshes_with_size_defaults(built, tmp_path, monkeypatch, capsys):
+    """A monkey-size replica needs no --layer3/--bone-offset: the defaults follow the section size,
+    are printed and recorded in model.json; an explicit flag still wins."""
+    from fem.model import preset_sections
+
+    z, polys, _ = preset_sections("monkey")
+    src = tmp_path / "replica"
+    src.mkdir()
+    (src / "sections.json").write_text(json.dumps(
+        {"units": "mm", "sections": [{"z": float(zi), "points": p.tolist()} for zi, p in zip(z, polys)]}))
+    monkeypatch.setenv("FINGERTIP_CACHE_DIR", str(built[1]))
+    out = tmp_path / "m"
+    assert pipeline.main(["mesh", str(src), "--size", "0.8", "--out", str(out)]) == 0
+    assert "layer3_mm 0.55, bone_offset_mm 0.15" in capsys.readouterr().out
+    _, info = load(out)
+    assert info["params"]["layer3_mm"] == 0.55 and info["params"]["bone_offset_mm"] == 0.15
+    assert info["size_defaults"]["chosen"] == {"layer3_mm": 0.55, "bone_offset_mm": 0.15}
+    assert info["size_defaults"]["middle_width_mm"] == pytest.approx(8.56, abs=0.01)
+    with pytest.raises(InputError, match="bone"):
+        model_from_args(str(src), None, params_for(None, bone_offset_mm=1.0))

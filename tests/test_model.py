@@ -176,3 +176,54 @@ def test_inclined_support_is_recorded_with_the_vertical_direction():
     assert sup["vertical_up"] == pytest.approx([0.0, np.cos(np.pi / 6), -0.5])
     with pytest.raises(InputError):
         cylinder_model(support_incline_deg=95.0)
+
+
+# ------------------------------------------------------------------ layer-3 and bone-offset defaults by size
+def preset_replica(tmp_path, preset, scale=1.0):
+    """sections.json of a preset's sections scaled in x and y by `scale` (a replica of that size)."""
+    from fem.model import preset_sections
+
+    z, polys, _ = preset_sections(preset)
+    return write_sections(tmp_path / f"{preset}_{scale:g}", [scale * p for p in polys], z)
+
+
+def test_preset_middle_widths_and_size_rule_reproduce_the_presets():
+    from fem.model import PRESET_MIDDLE_WIDTH_MM, PRESET_PARAMS, preset_sections, size_defaults
+
+    for preset, width in PRESET_MIDDLE_WIDTH_MM.items():
+        z, polys, _ = preset_sections(preset)
+        mid = np.interp(0.5 * (z[0] + z[-1]), z, [np.ptp(p[:, 0]) for p in polys])
+        assert mid == pytest.approx(width, abs=0.01), preset
+        assert size_defaults(width) == PRESET_PARAMS[preset]
+    assert size_defaults(4.0) == PRESET_PARAMS["monkey"] and size_defaults(25.0) == PRESET_PARAMS["human"]
+    half = size_defaults(0.5 * sum(PRESET_MIDDLE_WIDTH_MM.values()))
+    assert half == pytest.approx({"layer3_mm": 1.025, "bone_offset_mm": 0.575}, abs=1e-3)
+
+
+def test_sections_json_gets_layer_defaults_by_its_size(tmp_path):
+    monkey = preset_replica(tmp_path, "monkey")
+    with pytest.raises(InputError, match="bone"):            # the human values do not fit a monkey section
+        model_from_args(str(monkey), None, params_for(None, layer3_mm=1.5, bone_offset_mm=1.0))
+    m = model_from_args(str(monkey), None, params_for(None))
+    assert (m.params.layer3_mm, m.params.bone_offset_mm) == (0.55, 0.15)
+    rec = m.to_json()["size_defaults"]
+    assert rec["chosen"] == {"layer3_mm": 0.55, "bone_offset_mm": 0.15}
+    assert rec["middle_width_mm"] == pytest.approx(8.56, abs=0.01) and "monkey" in rec["rule"]
+    human = model_from_args(str(preset_replica(tmp_path, "human")), None, params_for(None))
+    assert (human.params.layer3_mm, human.params.bone_offset_mm) == (1.5, 1.0)
+    mid = model_from_args(str(preset_replica(tmp_path, "monkey", 1.5)), None, params_for(None))
+    t = (1.5 * 8.56 - 8.56) / (17.12 - 8.56)                 # 1.5 x the monkey width: halfway
+    assert mid.params.layer3_mm == pytest.approx(0.55 + t * 0.95, abs=2e-3)
+    assert mid.params.bone_offset_mm == pytest.approx(0.15 + t * 0.85, abs=2e-3)
+
+
+def test_explicit_layer_flags_override_the_size_defaults(tmp_path):
+    src = preset_replica(tmp_path, "monkey")
+    m = model_from_args(str(src), None, params_for(None, bone_offset_mm=0.3))
+    assert (m.params.layer3_mm, m.params.bone_offset_mm) == (0.55, 0.3)
+    assert m.derived["size_defaults"]["chosen"] == {"layer3_mm": 0.55}
+    scaled = model_from_args(str(src), None, params_for(None, layer3_scale=0.7))
+    assert scaled.params.layer3_mm is None and scaled.derived["f3"] == 0.7
+    preset = model_from_args(None, "human", params_for("human"))        # presets keep their values
+    assert (preset.params.layer3_mm, preset.params.bone_offset_mm) == (1.5, 1.0)
+    assert preset.derived["size_defaults"]["chosen"] == {}
