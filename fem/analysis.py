@@ -44,6 +44,8 @@ from fem.neural import NeuralData
 from reconstruct.errors import InputError
 
 DEPTH_RANGE_MM = (0.5, 1.0)
+RECEPTOR_COLUMNS = ("step", "site", "x_mm", "y_mm", "z_mm", "depth_mm")
+"""Columns of `<name>_receptors.csv` that are not measures."""
 DIAMETER_STEP_MM = 1.0
 THESIS_CANDIDATES = {
     "sed_MPa": "strain energy density",
@@ -82,14 +84,18 @@ def check_candidates(candidates) -> list[str]:
 # --------------------------------------------------------------------------- indentation results
 class IndentRun:
     """The results folder of `pipeline.py indent`: per experiment `<name>.csv` (one row per
-    indentation, `offset_x_mm`, `offset_z_mm`, ...) and `<name>_receptors.csv` (per indentation
-    every receptor point: x_mm, y_mm, z_mm, depth_mm and the measures the run computed).
+    indentation, `offset_x_mm`, `offset_z_mm`, ...), `<name>_receptors.csv` (per indentation
+    every receptor point: site, x_mm, y_mm, z_mm, depth_mm and the measures the run computed) and
+    `run.json` (model, indentor, sweep axis, receptors; see README "Indentation").
 
-    Receptor sites are identified by their order: run_scene writes the points depth by depth,
-    the same sites at every depth. `diameter_mm` (2D cylinders) is read from `../model.json`
-    when the folder sits in its model folder (the default `indent` output), else give it."""
+    Receptor sites are identified by the `site` column (the same id at every depth, step and
+    position). `diameter_mm` (2D cylinders) and each stimulus's sweep axis come from run.json.
+    Folders written before run.json and the site column still load: sites by row order (depth
+    by depth), the diameter from `../model.json`, the sweep axis from the larger offset range."""
 
     def __init__(self, folder, diameter_mm: float | None = None):
+        import json
+
         self.folder = Path(folder)
         if not self.folder.is_dir():
             raise InputError(f"no indentation results folder '{folder}': run `pipeline.py indent` first")
@@ -98,14 +104,23 @@ class IndentRun:
         if not self.stimuli:
             raise InputError(f"'{folder}' holds no <name>.csv + <name>_receptors.csv pairs from "
                              f"`pipeline.py indent`")
+        record = self.folder / "run.json"
+        self.run = json.loads(record.read_text()) if record.is_file() else None
         if diameter_mm is None:
-            info = self.folder.parent / "model.json"
-            if info.is_file():
-                import json
-
-                diameter_mm = json.loads(info.read_text()).get("params", {}).get("diameter_mm")
+            if self.run is not None:
+                diameter_mm = self.run["model"].get("diameter_mm")
+            elif (self.folder.parent / "model.json").is_file():
+                diameter_mm = json.loads((self.folder.parent / "model.json").read_text()).get(
+                    "params", {}).get("diameter_mm")
         self.diameter_mm = None if diameter_mm is None else float(diameter_mm)
         self._cache = {}
+
+    def sweep_axis(self, stimulus) -> str | None:
+        """'x' or 'z' for a sweep, None for fixed positions (from run.json; None without it)."""
+        if self.run is None:
+            return None
+        exp = next((e for e in self.run["experiments"] if e["name"] == stimulus), None)
+        return None if exp is None or exp["sweep"] is None else exp["sweep"]["axis"]
 
     def __repr__(self):
         return f"IndentRun('{self.folder}', stimuli={self.stimuli}, diameter_mm={self.diameter_mm})"
@@ -119,7 +134,8 @@ class IndentRun:
         steps = _read_csv(self.folder / f"{stimulus}.csv")
         offx = np.array([float(r["offset_x_mm"]) for r in steps])
         offz = np.array([float(r["offset_z_mm"]) for r in steps])
-        along_z = np.ptp(offz) > np.ptp(offx)
+        axis = self.sweep_axis(stimulus)
+        along_z = axis == "z" if self.run is not None else np.ptp(offz) > np.ptp(offx)
         position = offz if along_z else offx
         path = self.folder / f"{stimulus}_receptors.csv"
         with open(path) as fh:
@@ -131,19 +147,26 @@ class IndentRun:
         if per.min() != per.max() or per[0] == 0:
             raise InputError(f"'{stimulus}_receptors.csv' does not hold the same receptor points for every step")
         n = per[0]
-        table = table[np.argsort(step, kind="stable")]
+        has_site = "site" in header
+        keys = (table[:, header.index("depth_mm")], table[:, header.index("site")], step) if has_site else (step,)
+        table = table[np.lexsort(keys)]     # by step (then site and depth: row order does not matter)
         cols = {h: table[:, k].reshape(n_steps, n) for k, h in enumerate(header)}
         depth = cols["depth_mm"][0]
         depths = np.unique(depth)
-        k_sites = n // len(depths)
-        if k_sites * len(depths) != n or not all((depth == d).sum() == k_sites for d in depths):
-            raise InputError(f"'{stimulus}_receptors.csv': unequal receptor counts per depth")
-        site = np.empty(n, int)
-        for d in depths:
-            site[depth == d] = np.arange(k_sites)
+        if has_site:
+            site = cols["site"][0].astype(int)
+            if np.any(cols["site"] != site) or np.any(cols["depth_mm"] != depth):
+                raise InputError(f"'{stimulus}_receptors.csv': the receptor sites differ between steps")
+        else:                       # written before the site column: depth by depth, same sites
+            site = np.empty(n, int)
+            for d in depths:
+                site[depth == d] = np.arange((depth == d).sum())
+        sites = set(site[depth == depths[0]])
+        if any(set(site[depth == d]) != sites or (depth == d).sum() != len(sites) for d in depths):
+            raise InputError(f"'{stimulus}_receptors.csv': not every receptor site appears once at every depth")
         data = {"position": position, "along_z": along_z, "depth": depth, "site": site, "depths": depths,
                 "x": cols["x_mm"][0], "y": cols["y_mm"][0], "z": cols["z_mm"][0],
-                "values": {h: cols[h] for h in header[5:]}, "steps": steps}
+                "values": {h: cols[h] for h in header if h not in RECEPTOR_COLUMNS}, "steps": steps}
         self._cache[stimulus] = data
         return data
 
@@ -169,13 +192,13 @@ class IndentRun:
         return np.abs(v) if candidate.startswith("abs:") else v
 
     def site_index(self, stimulus, receptor_x_mm: float = 0.0, receptor_z_mm: float | None = None) -> int:
-        """Receptor site nearest the lateral position (x, and z in 3D; default the middle z),
-        judged at the shallowest depth."""
+        """Site id (the `site` column) of the receptor site nearest the lateral position (x, and z
+        in 3D; default the middle z), judged at the shallowest depth."""
         d = self._load(stimulus)
         top = d["depth"] == d["depths"][0]
         z = d["z"][top]
         rz = 0.5 * (z.min() + z.max()) if receptor_z_mm is None else receptor_z_mm
-        return int(np.argmin((d["x"][top] - receptor_x_mm) ** 2 + (z - rz) ** 2))
+        return int(d["site"][top][np.argmin((d["x"][top] - receptor_x_mm) ** 2 + (z - rz) ** 2)])
 
     def profile(self, stimulus, candidate, depth_mm, receptor_x_mm=0.0, site=None, align=True):
         """Spatial response profile: (positions (k,), values (k,)) of one receptor (the site
@@ -280,7 +303,7 @@ def as_runs(runs) -> dict:
         return {math.nan: runs[0]}
     if len(runs) != 2 or any(r.diameter_mm is None for r in runs):
         raise InputError("diameter interpolation needs exactly two runs with known model diameters "
-                         "(give --diameters D1 D2, or keep the runs in their model folders)")
+                         "(2D cylinder runs record theirs in run.json; else give --diameters D1 D2)")
     if runs[0].diameter_mm == runs[1].diameter_mm:
         raise InputError(f"the two runs have the same model diameter {runs[0].diameter_mm} mm")
     return dict(sorted((r.diameter_mm, r) for r in runs))

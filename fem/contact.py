@@ -535,7 +535,7 @@ def run_scene(model_dir, out_dir, scene: dict, progress: bool = True) -> str:
 
     from fem.indentors import make_indentor
     from fem.receptors import DEFAULT_DEPTHS_MM, DEFAULT_MEASURES, ReceptorSampler, receptor_grid
-    from reconstruct.io import staged_output
+    from reconstruct.io import staged_output, write_json
 
     t_start = time.perf_counter()
     model, system, region, info = open_model(model_dir, scene.get("material"), scene.get("nu"))
@@ -558,7 +558,7 @@ def run_scene(model_dir, out_dir, scene: dict, progress: bool = True) -> str:
     cm = ContactModel.from_fe(model, system, region, observe=sampler.operator)
     up = info.get("regions", {}).get("support", {}).get("vertical_up")
     middle_z = 0.5 * (sn.x[:, 2].min() + sn.x[:, 2].max()) if model.dim == 3 else 0.0
-    runs = []
+    runs, records = [], []
     for k, exp in enumerate(scene["experiment"]):
         name = str(exp.get("name", f"experiment{k + 1}"))
         place = {"orientation": exp.get("orientation", "parallel"),
@@ -589,6 +589,7 @@ def run_scene(model_dir, out_dir, scene: dict, progress: bool = True) -> str:
                 res = cm.sweep(ind, off[None], **load)[0] if "sweep" in exp else cm.indent(ind, **load)
                 steps.append((off, res))
         runs.append((name, ind, steps, time.perf_counter() - t0))
+        records.append(_experiment_record(name, exp, place, ind, offsets, loads, "sweep" in exp))
         if progress:
             print(f"{name}: {len(steps)} indentations in {runs[-1][3]:.2f} s", flush=True)
     out = scene.get("output", {})
@@ -596,6 +597,7 @@ def run_scene(model_dir, out_dir, scene: dict, progress: bool = True) -> str:
         for name, ind, steps, _ in runs:
             _write_run(tmp, name, ind, steps, cm, sn, sampler, measures, model,
                        pvd=bool(out.get("pvd", len(steps) <= 20)), plots=bool(out.get("plots", True)))
+        write_json(tmp / "run.json", _run_record(model_dir, model, info, rc, line, grid, measures, records))
     total = time.perf_counter() - t_start
     lines = [f"indentation results in {out_dir} ({total:.1f} s; model {model.ndof} DOFs, "
              f"{len(sn.nodes)} contact candidates, {len(grid.points_mm)} receptor points)"]
@@ -605,6 +607,63 @@ def run_scene(model_dir, out_dir, scene: dict, progress: bool = True) -> str:
                      f"{min(r.total_force_N for _, r in steps):.4g}-{max(r.total_force_N for _, r in steps):.4g} N, "
                      f"max penetration {worst:.1e} mm")
     return "\n".join(lines)
+
+
+RUN_FORMAT = 1
+"""Version of the run.json layout (raise it when a key changes meaning)."""
+
+
+def _experiment_record(name, exp, place, ind, offsets, loads, sweep) -> dict:
+    """run.json entry of one experiment: indentor (code, shapes, diameter where it has one),
+    placement, sweep axis and offsets (mm), loading."""
+    from dataclasses import asdict
+
+    shapes = [{"shape": type(p).__name__, **{k: (None if v == np.inf else v) for k, v in asdict(p).items()}}
+              for p in ind.parts]
+    diameters = {p.get("diameter_mm") for p in shapes}
+    if len(loads) and "force_N" in loads[0]:
+        loading = {"force_N": loads[0]["force_N"], "equal_force": loads[0]["equal_force"],
+                   "max_depth_mm": loads[0]["max_depth_mm"]}
+    else:
+        loading = {"depth_mm": [d["depth_mm"] for d in loads]}
+    axis = parse_sweep(exp["sweep"])[0] if sweep else None
+    return {"name": name, "indentor": str(exp["indentor"]), "shapes": shapes,
+            "diameter_mm": diameters.pop() if len(diameters) == 1 else None,
+            "orientation": place["orientation"], "position_mm": list(place["position_mm"]),
+            "incline_deg": place.get("incline_deg"), "approach": ind.approach.tolist(),
+            "length_axis": ind.e1.tolist(), "origin_mm": ind.origin_mm.tolist(),
+            "sweep": None if axis is None else {"axis": "xyz"[axis], "offsets_mm": offsets[:, axis].tolist()},
+            "loading": loading, "indentations": len(offsets) * len(loads),
+            "files": [f"{name}.csv", f"{name}_surface.csv", f"{name}_receptors.csv"]}
+
+
+def _run_record(model_dir, model, info, rc, line, grid, measures, experiments) -> dict:
+    """run.json: what produced an indentation results folder (model, material, receptors, experiments)."""
+    import hashlib
+    from importlib import metadata
+    from pathlib import Path
+
+    folder = Path(model_dir).resolve()
+    info_file = folder / "model.json"
+    try:
+        version = metadata.version("fingertip-fem")
+    except metadata.PackageNotFoundError:
+        version = None
+    mat = model.material
+    nus = set(mat.nu.values())
+    return {"format": RUN_FORMAT, "package": "fingertip-fem", "version": version,
+            "model": {"folder": str(folder), "dim": model.dim, "preset": info.get("preset"),
+                      "model_json_sha256": hashlib.sha256(info_file.read_bytes()).hexdigest()
+                      if info_file.is_file() else None,
+                      "diameter_mm": info.get("params", {}).get("diameter_mm"), "dofs": int(model.ndof)},
+            "material": mat.code, "E_MPa": {str(k): v for k, v in sorted(mat.E_MPa.items())},
+            "nu": nus.pop() if len(nus) == 1 else {str(k): v for k, v in sorted(mat.nu.items())},
+            "receptors": {"depths_mm": np.unique(grid.depth_mm).tolist(), "spacing_mm": float(rc.get("spacing_mm", 1.0)),
+                          "line": None if line is None else ["xyz"[line[0]], line[1]], "measures": list(measures),
+                          "sites": len(grid.sites_mm), "points": len(grid.points_mm),
+                          "site_column": "site: id of the surface site (row of sites_mm), the same in every "
+                                         "step, position and experiment of this folder"},
+            "experiments": experiments}
 
 
 def _width_mm(res, ind, x, dim):
@@ -634,11 +693,11 @@ def _write_run(folder, name, ind, steps, cm, sn, sampler, measures, model, pvd, 
         pts = np.zeros((len(sampler.grid.points_mm), 3))
         pts[:, :model.dim] = sampler.grid.points_mm
         for j in range(len(pts)):
-            rec.append([i, *pts[j], sampler.grid.depth_mm[j], *(vals[m][j] for m in measures)])
+            rec.append([i, sampler.grid.site[j], *pts[j], sampler.grid.depth_mm[j], *(vals[m][j] for m in measures)])
     _csv(folder / f"{name}.csv", list(rows[0]), [list(r.values()) for r in rows], csv)
     _csv(folder / f"{name}_surface.csv", ["step", "x_mm", "y_mm", "z_mm", "deflection_mm", "pressure_MPa",
                                           "force_N"], surf, csv)
-    _csv(folder / f"{name}_receptors.csv", ["step", "x_mm", "y_mm", "z_mm", "depth_mm", *measures], rec, csv)
+    _csv(folder / f"{name}_receptors.csv", ["step", "site", "x_mm", "y_mm", "z_mm", "depth_mm", *measures], rec, csv)
     if pvd:
         from fem.export import write_vtu
 

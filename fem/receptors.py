@@ -44,9 +44,11 @@ def receptor_grid(surface_x, surface_normal, depths_mm=DEFAULT_DEPTHS_MM, spacin
     """Receptor points below surface nodes (m, dim) with outward unit normals (m, dim).
 
     Sites are the surface nodes thinned to one per spacing_mm cube (the one nearest its centre).
-    line=(axis, value): only nodes within spacing_mm / 2 of the plane x[axis] = value, moved onto
-    it (a profile across the pad, e.g. (2, 0.0) for the section z = 0 of a 3D finger); with a
-    line the spacing is kept along the line only.
+    The cubes are centred on multiples of spacing_mm, so a row of sites lies on x = 0, the pad's
+    midline (and on the default indentor position). line=(axis, value): only nodes within
+    spacing_mm / 2 of the plane x[axis] = value, moved onto it (a profile across the pad, e.g.
+    (2, 0.0) for the section z = 0 of a 3D finger); with a line the spacing is kept along the line
+    only. `site` numbers the sites in the order of their cubes (a stable id within one grid).
     """
     x, n = np.asarray(surface_x, float), np.asarray(surface_normal, float)
     depths = np.atleast_1d(np.asarray(depths_mm, float))
@@ -60,10 +62,10 @@ def receptor_grid(surface_x, surface_normal, depths_mm=DEFAULT_DEPTHS_MM, spacin
                              f"inside the model")
         x, n = x[keep].copy(), n[keep]
         x[:, axis] = value
-    cell = np.floor(x / spacing_mm).astype(np.int64)
+    cell = np.floor(x / spacing_mm + 0.5).astype(np.int64)
     if line is not None:
         cell[:, line[0]] = 0
-    centre = (cell + 0.5) * spacing_mm
+    centre = cell * spacing_mm
     dist = np.linalg.norm(x - centre, axis=1)
     order = np.lexsort((dist, *cell.T[::-1]))
     _, first = np.unique(cell[order], axis=0, return_index=True)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import pipeline
-from fem.analysis import (IndentRun, Probe2D, fit_measure, gap_analysis, goodness, linear_fit, model_values,
+from fem.analysis import (IndentRun, Probe2D, as_runs, fit_measure, gap_analysis, goodness, linear_fit, model_values,
                           point_load_field, rank_candidates, rank_per_stimulus, receptive_field,
                           settling_separation, two_point_curves)
 from fem.neural import make_neural, read_neural_csv, write_neural_csv
@@ -199,6 +199,63 @@ def test_neural_csv_comments_aliases_and_defaults(tmp_path):
     data = read_neural_csv(p)
     assert data.stimuli == ["grating", "bar"] and data.units == ["unit"]
     np.testing.assert_allclose(data.rate_ips, [12, 3.5])
+
+
+# ----------------------------------------------------------------------------- results folder contract
+def _rewrite_receptors(folder, stimulus, change):
+    """Rewrite <stimulus>_receptors.csv through change(header, rows) -> (header, rows)."""
+    path = folder / f"{stimulus}_receptors.csv"
+    with open(path) as fh:
+        rows = list(csv.reader(fh))
+    header, body = change(rows[0], rows[1:])
+    with open(path, "w", newline="") as fh:
+        csv.writer(fh).writerows([header, *body])
+
+
+def test_receptor_sites_come_from_the_site_column(models, tmp_path):
+    """Rows shuffled within each step: the site column still pairs each receptor with its values."""
+    import shutil
+
+    ref = IndentRun(models[8] / "sweeps")
+    folder = tmp_path / "shuffled"
+    shutil.copytree(models[8] / "sweeps", folder)
+    rng = np.random.default_rng(1)
+    _rewrite_receptors(folder, "grating", lambda h, rows: (h, [rows[i] for i in rng.permutation(len(rows))]))
+    run = IndentRun(folder)
+    for x in (0.0, 1.0):
+        for depth in (0.5, 0.75):
+            np.testing.assert_array_equal(run.profile("grating", "sed_MPa", depth, x)[1],
+                                          ref.profile("grating", "sed_MPa", depth, x)[1])
+    assert run.site_index("grating", 1.0) == ref.site_index("grating", 1.0)
+
+
+def test_run_json_gives_diameter_and_sweep_axis_outside_the_model_folder(models, tmp_path):
+    import shutil
+
+    folder = tmp_path / "moved"
+    shutil.copytree(models[16] / "sweeps", folder)
+    run = IndentRun(folder)
+    assert run.diameter_mm == 16.0 and run.sweep_axis("bar") == "x"
+    (folder / "run.json").unlink()
+    assert IndentRun(folder).diameter_mm is None
+    with pytest.raises(InputError, match="--diameters"):
+        as_runs([IndentRun(models[8] / "sweeps"), IndentRun(folder)])
+
+
+def test_folders_without_site_column_and_run_json_still_load(models, tmp_path):
+    import shutil
+
+    folder = tmp_path / "models" / "cyl8" / "old"
+    folder.parent.mkdir(parents=True)
+    shutil.copy(models[8] / "model.json", folder.parent / "model.json")
+    shutil.copytree(models[8] / "sweeps", folder)
+    (folder / "run.json").unlink()
+    _rewrite_receptors(folder, "grating", lambda h, rows: ([c for c in h if c != "site"],
+                                                           [r[:1] + r[2:] for r in rows]))
+    old, ref = IndentRun(folder), IndentRun(models[8] / "sweeps")
+    assert old.diameter_mm == 8.0 and old.sweep_axis("grating") is None
+    np.testing.assert_array_equal(old.profile("grating", "sed_MPa", 0.75, 1.0)[1],
+                                  ref.profile("grating", "sed_MPa", 0.75, 1.0)[1])
 
 
 # ----------------------------------------------------------------------------- spatial vs population

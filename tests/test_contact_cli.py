@@ -172,3 +172,45 @@ def test_3d_block_model_folder(tmp_path):
     near = [abs(float(s["x_mm"])) + abs(float(s["z_mm"]) - 3.0) for s in loaded]
     assert max(near) < 2.0                                     # under the sphere at (0, 3)
     assert (out / "sphere_3_pressure.png").is_file()
+
+
+def test_receptor_site_column_and_run_json(cyl8, tmp_path):
+    """Every receptor row names its site (the same ids at every depth and step), and run.json
+    records what produced the folder."""
+    import hashlib
+    import json
+
+    scene = tmp_path / "s.toml"
+    scene.write_text('material = "m43338"\n[receptors]\ndepths_mm = [0.5, 1.0]\nspacing_mm = 0.5\n'
+                     '[output]\npvd = false\nplots = false\n\n'
+                     '[[experiment]]\nname = "c3"\nindentor = "C3"\ndepth_mm = 0.5\nsweep = "x=-1:1:0.5"\n\n'
+                     '[[experiment]]\nname = "bar"\nindentor = "bar:1.5"\nforce_N = 0.002\n')
+    out = tmp_path / "s"
+    assert pipeline.main(["indent", str(cyl8), "--scene", str(scene), "--out", str(out), "--quiet"]) == 0
+    rec = _rows(out / "c3_receptors.csv")
+    assert list(rec[0])[:6] == ["step", "site", "x_mm", "y_mm", "z_mm", "depth_mm"]
+    by_step = {}
+    for r in rec:
+        by_step.setdefault(r["step"], []).append((int(r["site"]), r["depth_mm"], r["x_mm"], r["y_mm"]))
+    assert len(by_step) == 5 and all(v == by_step["0"] for v in by_step.values())    # same points, ids
+    first = by_step["0"]
+    sites = sorted({s for s, *_ in first})
+    assert sites == list(range(len(sites))) and len(first) == 2 * len(sites)
+    pts = {(s, float(d)): np.array([float(x), float(y)]) for s, d, x, y in first}
+    for s in sites:                         # both depths of a site on its (nearly radial) normal
+        a, b = pts[(s, 0.5)], pts[(s, 1.0)]
+        assert np.linalg.norm(a - b) == pytest.approx(0.5, abs=1e-7)
+        assert np.linalg.norm(a) - np.linalg.norm(b) == pytest.approx(0.5, abs=1e-3)
+    assert min(abs(p[0]) for p in pts.values()) < 0.07               # a site on the midline x = 0
+    run = json.loads((out / "run.json").read_text())
+    assert run["model"]["folder"] == str(cyl8.resolve()) and run["model"]["diameter_mm"] == 8.0
+    assert run["model"]["model_json_sha256"] == hashlib.sha256((cyl8 / "model.json").read_bytes()).hexdigest()
+    assert run["material"] == "m43338" and run["nu"] == 0.48 and run["version"] == "0.1.0"
+    assert run["receptors"]["depths_mm"] == [0.5, 1.0] and run["receptors"]["spacing_mm"] == 0.5
+    assert run["receptors"]["sites"] == len(sites) and run["receptors"]["line"] is None
+    c3, bar = run["experiments"]
+    assert c3["name"] == "c3" and c3["indentor"] == "C3" and c3["diameter_mm"] == 4.76
+    assert c3["orientation"] == "parallel" and c3["sweep"] == {"axis": "x", "offsets_mm": [-1, -0.5, 0, 0.5, 1]}
+    assert c3["loading"] == {"depth_mm": [0.5]} and c3["approach"] == [0.0, -1.0, 0.0]
+    assert bar["sweep"] is None and bar["diameter_mm"] is None and bar["shapes"][0]["width_mm"] == 1.5
+    assert bar["loading"] == {"force_N": 0.002, "equal_force": False, "max_depth_mm": 5.0}
