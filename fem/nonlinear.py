@@ -1,35 +1,43 @@
-"""Large deformation: geometrically nonlinear, nearly incompressible neo-Hookean solids in 2D plane
-strain, Newton's method with load stepping (thesis 6.2.1 used a large-displacement formulation
-for the 2 mm line load). Prescribed displacements only (the thesis indented by prescribing the
-displacement of the nodes under the wedge); frictionless contact is not part of this solver.
+"""Large deformation: geometrically nonlinear, nearly incompressible neo-Hookean solids in 3D
+(tetrahedra) and 2D plane strain, Newton's method with adaptive load stepping (thesis 6.2.1 used a
+large-displacement formulation for the 2 mm line load). Prescribed displacements only (the thesis
+indented by prescribing the displacement of the nodes under the wedge); frictionless contact is
+not part of this solver.
 
-Units mm, N (per mm of thickness), MPa.
+Units mm, N (2D: per mm of thickness), MPa.
 
 Material and formulation
 ------------------------
-Per layer (mu, lambda from the model's material), with the plane-strain deformation gradient F
-(2 x 2; F_33 = 1), J = det F, I1 = tr(F^T F):
+Per layer (mu, lambda from the model's material), in d = 2 or 3 dimensions with the deformation
+gradient F (d x d; plane strain F_33 = 1), J = det F, I1 = tr(F^T F):
 
-    W(F, p) = mu / 2 (I1 / J - 2)  +  p (J - 1)  -  p^2 / (2 kappa),     kappa = lambda + mu
+    W(F, p) = mu / 2 (J^(-2/d) I1 - d)  +  p (J - 1)  -  p^2 / (2 kappa),     kappa = lambda + 2 mu / d
 
-the isochoric part in the 2D split (the deviator of the linear solver); at J = 1 it equals the
-3D neo-Hookean mu / 2 (I1 + 1 - 3) with F_33 = 1, and it linearises to the solver's
-2 mu dev eps : dev eps + kappa (tr eps)^2. Mixed u-p: quadratic (P2) displacement and the linear
-solver's pressure space (P1, continuous within a layer, discontinuous across layers) with the
-same 1 / kappa-weighted lumped mass D, so that the pressure is explicit, p = D^-1 g(u) with
-g_i = int q_i (J - 1), and the small-strain limit is exactly `fem.solver.Model`'s discretisation
-(no locking as nu -> 0.5, for the same reason). Newton's tangent is exact:
+the isochoric part in the d-dimensional split of the linear solver (2D: mu / 2 (I1 / J - 2), at
+J = 1 the 3D neo-Hookean with F_33 = 1); it linearises to the solver's 2 mu dev_d eps : dev_d eps
++ kappa (tr eps)^2. Mixed u-p: quadratic (P2) displacement and the linear solver's pressure space
+(P1, continuous within a layer, discontinuous across layers) with the same 1 / kappa-weighted
+lumped mass D, so that the pressure is explicit, p = D^-1 g(u) with g_i = int q_i (J - 1), and the
+small-strain limit is exactly `fem.solver.Model`'s discretisation (no locking as nu -> 0.5, for the
+same reason). First Piola stress and exact tangent (c = mu J^(-2/d)):
 
-    K = K_iso + K_p + G^T D^-1 G,   G_ij = int q_i J F^-T : grad phi_j
+    P = c (F - I1 / d F^-T) + p J F^-T
+    dP/dF = c [I - 2/d (F (x) F^-T + F^-T (x) F) + 2 I1 / d^2 F^-T (x) F^-T + I1 / d F^-T (x)' F^-T]
+            + p J [F^-T (x) F^-T - F^-T (x)' F^-T]                  ((A (x)' B)_iJkL = A_iL B_kJ)
+    K = K_F + G^T D^-1 G,   G_ij = int q_i J F^-T : grad phi_j
 
-solved as the sparse symmetric saddle system [[K_iso + K_p, G^T], [G, -D]]. Load steps scale all
-prescribed displacements; Newton steps are backtracked (halved up to 6 times) when they do not
-lower the residual or invert an element; a load step whose Newton iteration fails (J <= 0 at a
-quadrature point, or no convergence) is halved.
+solved as the sparse symmetric saddle system [[K_F, G^T], [G, -D]] (MKL PARDISO LDL^T through
+pypardiso, one step of iterative refinement; SciPy SuperLU without pypardiso). Load steps scale
+all prescribed displacements; the first Newton iteration of a step moves the prescribed DOFs with
+the tangent predictor; later steps are backtracked (halved up to 6 times) when they do not lower
+the residual or would invert an element. A load step whose Newton iteration fails (J <= 0 at a
+quadrature point, or no convergence in max_iter) is halved, up to max_cuts times below the first
+step size; after two steps that converge in at most 6 iterations the step grows back (x 2, at
+most the first size).
 
-    nl = NeoHookean2D(model)                           # fem.solver.Model, 2D
-    res = nl.solve({"fixed": 0.0, "load": (None, -2.0)}, steps=8)
-    res.u[-1], res.history[-1] (residual norms of the last step's Newton iterations)
+    nl = NeoHookean(model)                            # fem.solver.Model, 2D or 3D
+    res = nl.solve({"fixed": 0.0, "load": (0.0, -2.0)}, steps=20)
+    res.u[-1], res.reaction[-1], res.history[-1], res.min_J
 """
 from __future__ import annotations
 
@@ -41,149 +49,204 @@ import scipy.sparse as sp
 from reconstruct.errors import InputError
 
 
-def _sparse_solve(A, b):
-    """Solve A x = b (A sparse, symmetric indefinite saddle) with one step of iterative refinement:
-    the bone is 1e5 times stiffer than the soft layers, and without refinement the solve's error
-    floors Newton's residual decrease at ~1e-7 of the reactions."""
-    A = A.tocsr()
-    try:
-        from pypardiso import PyPardisoSolver
-    except ImportError:
-        from scipy.sparse.linalg import splu
+class _SaddleSolver:
+    """Solve [[K, G^T], [G, -D]] x = b (sparse symmetric indefinite) with one step of iterative
+    refinement: the bone is 1e5 times stiffer than the soft layers, and without refinement the
+    solve's error floors Newton's residual decrease at ~1e-7 of the reactions. One PARDISO
+    instance is reused (pypardiso locates MKL once per instance)."""
 
-        lu = splu(A.tocsc())
-        x = lu.solve(b)
-        return x + lu.solve(b - A @ x)
-    upper = sp.triu(A, format="csr")                 # PARDISO symmetric indefinite reads the upper part
-    solver = PyPardisoSolver(mtype=-2)
-    try:
-        solver.factorize(upper)
-        x = solver.solve(upper, b)
-        return x + solver.solve(upper, b - A @ x)
-    finally:
-        solver.free_memory(everything=True)
+    def __init__(self):
+        try:
+            from pypardiso import PyPardisoSolver
+
+            from fem.biomech import _fast_pardiso
+
+            _fast_pardiso()
+            self._pardiso = PyPardisoSolver(mtype=-2)     # symmetric indefinite, reads the upper part
+        except ImportError:
+            self._pardiso = None
+
+    def __call__(self, A, b):
+        A = A.tocsr()
+        if self._pardiso is None:
+            from scipy.sparse.linalg import splu
+
+            lu = splu(A.tocsc())
+            x = lu.solve(b)
+            return x + lu.solve(b - A @ x)
+        upper = sp.triu(A, format="csr")
+        try:
+            self._pardiso.factorize(upper)
+            x = self._pardiso.solve(upper, b)
+            return x + self._pardiso.solve(upper, b - A @ x)
+        finally:
+            self._pardiso.free_memory(everything=True)
 
 
 @dataclass
 class NonlinearResult:
     """Converged load steps: load factors t (k,), displacements u (k, ndof) [mm], reaction
-    nodal forces (k, ndof) [N/mm] (internal force on every DOF; on constrained DOFs the reaction),
-    Newton residual norm histories per step, step cuts taken."""
+    nodal forces (k, ndof) [N; N/mm in 2D] (internal force on every DOF; on constrained DOFs the
+    reaction), smallest J at any quadrature point per step min_J (k,), Newton residual norm
+    histories per step, step cuts taken."""
     t: np.ndarray
     u: np.ndarray
     reaction: np.ndarray
+    min_J: np.ndarray
     history: list = field(default_factory=list)
     cuts: int = 0
 
 
-class NeoHookean2D:
-    """Nearly incompressible neo-Hookean plane strain on a 2D `fem.solver.Model` (same mesh,
-    layers, materials, regions and pressure space)."""
+class NeoHookean:
+    """Nearly incompressible neo-Hookean solid on a `fem.solver.Model` (3D tetrahedra or 2D plane
+    strain; same mesh, layers, materials, regions and pressure space). Element work is done in
+    chunks of `chunk` elements (the 3D tangent holds 900 numbers per element)."""
 
-    def __init__(self, model):
-        from skfem import Basis, ElementTriP2
+    def __init__(self, model, chunk: int = 4000):
+        from skfem import Basis, ElementTetP2, ElementTriP2
 
-        if model.dim != 2:
-            raise InputError("the large-deformation solver handles 2D plane-strain models only (3D is not "
-                             "implemented): mesh a cross-section with `pipeline.py mesh --section-z`")
-        self.model = model
+        self.model, self.dim, self.chunk = model, model.dim, int(chunk)
         self.rigid = np.isin(model.layer, list(model.material.rigid))
-        scalar = Basis(model.mesh, ElementTriP2(), intorder=2)
-        self.grad = np.array([scalar.basis[a][0].grad for a in range(scalar.Nbfun)])   # (nb, 2, M, nq)
-        self.dx = scalar.dx                                                              # (M, nq)
+        scalar = Basis(model.mesh, ElementTetP2() if self.dim == 3 else ElementTriP2(), intorder=2)
+        self.grad = np.array([scalar.basis[a][0].grad for a in range(scalar.Nbfun)]).transpose(2, 3, 0, 1)  # (M, nq, nb, d)
+        self.dx = scalar.dx                                                                   # (M, nq)
         # the linear solver's layer-discontinuous P1 pressure basis and lumped 1/kappa mass (same
         # element order and quadrature): its small-strain limit is then Model's discretisation
         pb = model.pressure_basis
-        self.q = np.array([np.asarray(pb.basis[c][0]) for c in range(pb.Nbfun)])              # (3, M, nq)
-        self.pdofs = pb.element_dofs                                                      # (3, M)
+        self.q = np.array([np.asarray(pb.basis[c][0]) for c in range(pb.Nbfun)]).transpose(1, 2, 0)  # (M, nq, nc)
+        self.pdofs = pb.element_dofs.T                                                        # (M, nc)
         self.D = model.pressure_compliance
-        self.udofs = model.basis.element_dofs                                             # (nb*2, M)
-        self.mu = model.mu[:, None]
-        self.ndof, self.np_ = model.ndof, pb.N
+        self.udofs = model.basis.element_dofs.T                                               # (M, nb*d)
+        self.mu = model.mu
+        self.ndof, self.npres = model.ndof, pb.N
+        self._solver = None
 
     # ------------------------------------------------------------------ kinematics and assembly
-    def deformation_gradient(self, u) -> np.ndarray:
-        """(2, 2, M, nq) F = I + grad u at the quadrature points."""
-        ue = u[self.udofs].reshape(len(self.grad), 2, -1)                                # (nb, 2, M)
-        H = np.einsum("aie,ajeq->ijeq", ue, self.grad)
-        return H + np.eye(2)[:, :, None, None]
+    def deformation_gradient(self, u, cells=slice(None)) -> np.ndarray:
+        """(M, nq, d, d) F = I + grad u at the quadrature points of `cells`."""
+        grad = self.grad[cells]
+        ue = u[self.udofs[cells]].reshape(len(grad), -1, self.dim)                            # (M, nb, d)
+        return np.matmul(ue.transpose(0, 2, 1)[:, None], grad) + np.eye(self.dim)
 
-    def _local(self, u, tangent=True):
-        F = self.deformation_gradient(u)
-        J = F[0, 0] * F[1, 1] - F[0, 1] * F[1, 0]
+    def jacobian(self, u) -> np.ndarray:
+        """(M, nq) J = det F at the quadrature points."""
+        return np.concatenate([np.linalg.det(self.deformation_gradient(u, c)) for c in self._chunks()])
+
+    def _chunks(self):
+        M = len(self.dx)
+        return [slice(s, min(M, s + self.chunk)) for s in range(0, M, self.chunk)]
+
+    def pressure(self, u) -> np.ndarray:
+        """(npressure,) nodal pressure [MPa], p = D^-1 g, g_c = int q_c (J - 1)."""
+        g = np.zeros(self.npres)
+        for c in self._chunks():
+            J = np.linalg.det(self.deformation_gradient(u, c))
+            g += np.bincount(self.pdofs[c].ravel(), np.einsum("eqc,eq->ec", self.q[c], self.dx[c] * (J - 1.0)).ravel(),
+                             minlength=self.npres)
+        return g / self.D
+
+    def _local(self, u, p_nodes, cells, tangent):
+        """Element residual (m, nb*d) and, with tangent, stiffness (m, nb*d, nb*d) and pressure
+        coupling G (m, nc, nb*d) of the elements `cells`."""
+        d, grad, w = self.dim, self.grad[cells], self.dx[cells]
+        F = self.deformation_gradient(u, cells)
+        J = np.linalg.det(F)
         if np.any(J <= 0):
             raise FloatingPointError("inverted element (J <= 0)")
-        FiT = np.stack([np.stack([F[1, 1], -F[1, 0]]), np.stack([-F[0, 1], F[0, 0]])]) / J   # F^-T
-        I1 = np.einsum("ijeq,ijeq->eq", F, F)
-        mu = self.mu / J
-        g = np.einsum("ceq,eq->ce", self.q, self.dx * (J - 1.0))                           # (3, M)
-        p_nodes = np.bincount(self.pdofs.ravel(), g.ravel(), minlength=self.np_) / self.D
-        p = np.einsum("ceq,ce->eq", self.q, p_nodes[self.pdofs])                           # at qp
-        P = mu * (F - 0.5 * I1 * FiT) + p * J * FiT                                        # (2, 2, M, nq)
-        r = np.einsum("iJeq,aJeq,eq->aie", P, self.grad, self.dx)                          # (nb, 2, M)
+        FiT = np.linalg.inv(F).transpose(0, 1, 3, 2)
+        I1 = np.einsum("eqij,eqij->eq", F, F)
+        c = self.mu[cells, None] * J ** (-2.0 / d)                                            # mu J^(-2/d)
+        p = np.einsum("eqc,ec->eq", self.q[cells], p_nodes[self.pdofs[cells]])
+        P = c[..., None, None] * (F - (I1 / d)[..., None, None] * FiT) + (p * J)[..., None, None] * FiT
+        M, nb = grad.shape[0], grad.shape[2]
+        r = np.einsum("eqai,eq->eai", np.matmul(grad, P.transpose(0, 1, 3, 2)), w).reshape(M, nb * d)
         if not tangent:
-            return r, None, None, p_nodes, J
-        d = np.eye(2)
-        A = (mu * (np.einsum("ik,JL->iJkL", d, d)[..., None, None]
-                   - np.einsum("iJeq,kLeq->iJkLeq", F, FiT) - np.einsum("iJeq,kLeq->iJkLeq", FiT, F)
-                   + 0.5 * I1 * (np.einsum("iJeq,kLeq->iJkLeq", FiT, FiT)
-                                 + np.einsum("iLeq,kJeq->iJkLeq", FiT, FiT)))
-             + p * J * (np.einsum("kLeq,iJeq->iJkLeq", FiT, FiT) - np.einsum("iLeq,kJeq->iJkLeq", FiT, FiT)))
-        k = np.einsum("iJkLeq,aJeq,bLeq,eq->eaibk", A, self.grad, self.grad, self.dx)      # (M, nb, 2, nb, 2)
-        G = np.einsum("ceq,kLeq,bLeq,eq->ecbk", self.q, J * FiT, self.grad, self.dx)       # (M, 3, nb, 2)
-        return r, k, G, p_nodes, J
+            return r, None, None
+        X = np.matmul(grad, F.transpose(0, 1, 3, 2)).reshape(M, -1, nb * d)                   # F grad phi_a
+        Y = np.matmul(grad, FiT.transpose(0, 1, 3, 2)).reshape(M, -1, nb * d)                 # F^-T grad phi_a
+
+        def quad(weight, A, B):       # (M, m, n) sum over the quadrature points of weight A_m B_n
+            return np.matmul((A * weight[..., None]).transpose(0, 2, 1), B)
+
+        cw, pw = c * w, p * J * w
+        S = quad(cw.repeat(d, axis=1), grad.transpose(0, 1, 3, 2).reshape(M, -1, nb),
+                 grad.transpose(0, 1, 3, 2).reshape(M, -1, nb))                               # (M, nb, nb)
+        XY = quad(cw, X, Y)
+        k = (S[:, :, None, :, None] * np.eye(d)[None, None, :, None, :]).reshape(M, nb * d, nb * d)
+        k -= (2.0 / d) * (XY + XY.transpose(0, 2, 1))
+        k += quad(cw * 2.0 * I1 / d**2 + pw, Y, Y)
+        k += quad(cw * I1 / d - pw, Y, Y).reshape(M, nb, d, nb, d).transpose(0, 1, 4, 3, 2).reshape(M, nb * d, nb * d)
+        G = quad(J * w, self.q[cells], Y)                                                     # (M, nc, nb*d)
+        return r, k, G
 
     def internal_force(self, u) -> np.ndarray:
-        """(ndof,) internal nodal forces [N/mm] of displacement u (the residual with no load)."""
-        r = self._local(u, tangent=False)[0]
-        return np.bincount(self.udofs.ravel(), r.reshape(-1, r.shape[-1]).ravel(), minlength=self.ndof)
+        """(ndof,) internal nodal forces [N; N/mm in 2D] of displacement u (the residual with no load)."""
+        p_nodes = self.pressure(u)
+        f = np.zeros(self.ndof)
+        for c in self._chunks():
+            f += np.bincount(self.udofs[c].ravel(), self._local(u, p_nodes, c, False)[0].ravel(), minlength=self.ndof)
+        return f
 
     def tangent(self, u):
-        """(internal force (ndof,), saddle matrix ((ndof + npressure)^2) of the exact tangent)."""
-        r, k, G, _, _ = self._local(u)
-        M, nb = k.shape[0], k.shape[1]
-        dofs = self.udofs.T                                                                 # (M, nb*2)
-        n = nb * 2
-        K = sp.csr_matrix((k.reshape(M, -1).ravel(), (np.repeat(dofs, n, axis=1).ravel(),
-                                                      np.tile(dofs, (1, n)).ravel())), shape=(self.ndof,) * 2)
-        Gm = sp.csr_matrix((G.reshape(M, -1).ravel(), (np.repeat(self.pdofs.T, n, axis=1).ravel(),
-                                                        np.tile(dofs, (1, 3)).ravel())), shape=(self.np_, self.ndof))
-        f = np.bincount(self.udofs.ravel(), r.reshape(-1, M).ravel(), minlength=self.ndof)
-        return f, K, Gm
+        """(internal force (ndof,), K (ndof^2) and G (npressure x ndof) sparse): the exact tangent
+        is K + G^T D^-1 G."""
+        p_nodes = self.pressure(u)
+        f, K, G = np.zeros(self.ndof), None, None
+        for c in self._chunks():
+            r, k, g = self._local(u, p_nodes, c, True)
+            f += np.bincount(self.udofs[c].ravel(), r.ravel(), minlength=self.ndof)
+            dofs, pd = self.udofs[c], self.pdofs[c]
+            n, nc = dofs.shape[1], pd.shape[1]
+            Kc = sp.csr_matrix((k.ravel(), (np.repeat(dofs, n, axis=1).ravel(), np.tile(dofs, (1, n)).ravel())),
+                               shape=(self.ndof,) * 2)
+            Gc = sp.csr_matrix((g.ravel(), (np.repeat(pd, n, axis=1).ravel(), np.tile(dofs, (1, nc)).ravel())),
+                               shape=(self.npres, self.ndof))
+            K, G = (Kc, Gc) if K is None else (K + Kc, G + Gc)
+        return f, K, G
 
     # ------------------------------------------------------------------ Newton with load stepping
     def solve(self, prescribed, steps: int = 4, tol: float = 1e-10, max_iter: int = 25,
               max_cuts: int = 8, loads=None) -> NonlinearResult:
         """Prescribed displacements (as `Model.system`: region -> value) applied in `steps` equal
-        load steps (halved on failure, at most max_cuts times). tol: Newton stops when the free
-        residual norm is below tol times the norm of the first step's initial residual.
-        loads: optional (ndof,) fixed nodal forces [N/mm] scaled with the load factor too."""
+        load steps, adapted (see the module notes; at most max_cuts halvings below 1 / steps).
+        tol: Newton stops when the free residual norm is below tol times the reaction norm.
+        loads: optional (ndof,) fixed nodal forces [N] scaled with the load factor too."""
         system = self.model.system(prescribed)
         fixed, values = system.fixed, system.values
-        rigid = np.unique(self.udofs[:, self.rigid]) if self.rigid.any() else np.zeros(0, int)
+        rigid = np.unique(self.udofs[self.rigid]) if self.rigid.any() else np.zeros(0, int)
         free = np.setdiff1d(np.arange(self.ndof), np.union1d(fixed, rigid))
         ext = np.zeros(self.ndof) if loads is None else np.asarray(loads, float)
         u = np.zeros(self.ndof)
-        out_t, out_u, out_f, hist = [0.0], [u.copy()], [np.zeros(self.ndof)], [[]]
-        t, dt, cuts, scale = 0.0, 1.0 / steps, 0, None
+        out_t, out_u, out_f, out_J, hist = [0.0], [u.copy()], [np.zeros(self.ndof)], [1.0], [[]]
+        t, dt0, cuts, easy = 0.0, 1.0 / steps, 0, 0
+        dt = dt0
         while t < 1.0 - 1e-12:
             t_new = min(1.0, t + dt)
             try:
-                trial, h, scale = self._newton(u, fixed, (t_new - t) * values, free, t_new * ext, tol,
-                                               max_iter, scale)
+                trial, h = self._newton(u, fixed, (t_new - t) * values, free, t_new * ext, tol, max_iter)
             except (FloatingPointError, RuntimeError) as exc:
                 cuts += 1
-                if cuts > max_cuts:
-                    raise RuntimeError(f"large-deformation solve failed at load factor {t_new:.4g} after "
-                                       f"{max_cuts} step cuts ({exc}); use more steps or a finer mesh") from None
                 dt /= 2
+                if dt < dt0 / 2 ** max_cuts:
+                    J = self.jacobian(u)
+                    e = int(np.argmin(J.min(axis=1)))
+                    where = self.model.mesh.p[:, self.model.mesh.t[:, e]].mean(axis=1)
+                    raise RuntimeError(
+                        f"large-deformation solve stopped at load factor {t:.4g} (next step {t_new:.4g}: {exc}); "
+                        f"smallest J there {J.min():.3g} in layer {self.model.layer[e]} at "
+                        f"{np.round(where, 3).tolist()} mm") from None
+                easy = 0
                 continue
             t, u = t_new, trial
+            easy = easy + 1 if len(h) <= 6 else 0
+            if easy >= 2 and dt < dt0:
+                dt, easy = min(2 * dt, dt0), 0
             out_t.append(t)
             out_u.append(u.copy())
             out_f.append(self.internal_force(u))
+            out_J.append(float(self.jacobian(u).min()))
             hist.append(h)
-        return NonlinearResult(np.array(out_t), np.array(out_u), np.array(out_f), hist, cuts)
+        return NonlinearResult(np.array(out_t), np.array(out_u), np.array(out_f), np.array(out_J), hist, cuts)
 
     def _line_search(self, u, du, free, ext, norm, tries: int = 6):
         """The full Newton step if it lowers the residual (always, near the solution: quadratic
@@ -202,11 +265,13 @@ class NeoHookean2D:
         trial[free] += 2 * alpha * du          # no decrease found: take the smallest step tried
         return trial
 
-    def _newton(self, u, fixed, dfix, free, ext, tol, max_iter, scale):
+    def _newton(self, u, fixed, dfix, free, ext, tol, max_iter):
         """Newton from the last converged u; the first iteration moves the prescribed DOFs by dfix
         with the consistent tangent predictor (the free DOFs follow), so that the loaded nodes
-        never run ahead of their neighbours."""
+        never run ahead of their neighbours. Returns (u, residual norms after each iteration)."""
         hist, u = [], u.copy()
+        if self._solver is None:
+            self._solver = _SaddleSolver()
         for it in range(max_iter):
             f, K, G = self.tangent(u)
             r = (f - ext)[free]
@@ -216,14 +281,14 @@ class NeoHookean2D:
                 hist.append(norm)
                 stalled = len(hist) > 1 and norm > 0.5 * hist[-2] and norm <= 1e-6 * scale   # round-off floor
                 if norm <= tol * scale or stalled:
-                    return u, hist, scale
+                    return u, hist
             Gf = G[:, free]
             A = sp.bmat([[K[free][:, free], Gf.T], [Gf, -sp.diags(self.D)]], format="csr")
             rhs_u, rhs_p = -r, np.zeros(len(self.D))
             if it == 0:
                 rhs_u = rhs_u - K[free][:, fixed] @ dfix
                 rhs_p = -(G[:, fixed] @ dfix)
-            du = _sparse_solve(A, np.concatenate([rhs_u, rhs_p]))[:len(free)]
+            du = self._solver(A, np.concatenate([rhs_u, rhs_p]))[:len(free)]
             if not np.all(np.isfinite(du)):
                 raise RuntimeError("singular tangent")
             if it == 0:
@@ -237,14 +302,16 @@ class NeoHookean2D:
 # --------------------------------------------------------------------------- line load: nonlinear vs linear
 @dataclass
 class LineLoadComparison:
-    """Linear and large-deformation solutions of a 2D section whose surface nodes within
-    half_width_mm of the load line are pushed down (approach -y) by each depth, sideways free.
+    """Linear and large-deformation solutions of a model whose surface nodes under the load (see
+    `line_load_model`) are pushed down (approach -y) by each depth: held sideways (they move with
+    the wedge) unless slip.
 
-    Per depth (k,): force_linear_N / force_nonlinear_N [N/mm]; surface nodes' undeformed x
-    distance_mm (n,) from the load line and deflection (k, n) [mm, into the body +];
-    max_difference (k,) = max |nonlinear - linear| surface deflection / depth; newton: residual
-    histories of the last load step per depth; failed: {depth: message} where the nonlinear solve
-    could not reach the depth."""
+    Per depth (k,): force_linear_N / force_nonlinear_N [N; N/mm in 2D]; profile nodes' undeformed
+    signed distance_mm (n,) from the load line (2D: x - x0; 3D: z - z0 along the finger axis,
+    nodes within band_mm of x = x0) and deflection (k, n) [mm, into the body +]; max_difference
+    (k,) = max |nonlinear - linear| deflection / depth; min_J (k,) smallest volume ratio reached;
+    newton: residual histories of the last load step; seconds (k,) wall time of each nonlinear
+    solve; failed: {depth: message} where the nonlinear solve could not reach the depth."""
     depths_mm: np.ndarray
     distance_mm: np.ndarray
     deflection_linear_mm: np.ndarray
@@ -252,14 +319,24 @@ class LineLoadComparison:
     force_linear_N: np.ndarray
     force_nonlinear_N: np.ndarray
     max_difference: np.ndarray
+    min_J: np.ndarray
     newton: list
+    seconds: np.ndarray
     failed: dict
 
 
-def line_load_model(model_dir, material=None, nu=None, position_x_mm=None, half_width_mm: float = 0.0):
-    """(fem.solver.Model with a 'load' region, load x [mm]) for a 2D model folder: the surface
-    vertices within half_width_mm of x = position (default the section's centroid x; at least
-    the nearest vertex) form the loaded patch."""
+#: constraints of a model folder without the load (as fem.contact.open_model)
+HELD = {2: {"fixed": 0.0}, 3: {"nail": 0.0, "support": (None, 0.0, None)}}
+
+
+def line_load_model(model_dir, material=None, nu=None, position_mm=None, half_width_mm: float = 0.0,
+                    half_length_mm: float = 1.0):
+    """(fem.solver.Model with a 'load' region, load position (x0, z0) [mm]) of a model folder.
+
+    2D: the surface vertices within half_width_mm of x = x0 (default the section's centroid x;
+    at least the nearest vertex). 3D: a wedge across the finger axis (thesis 6.2.1): the volar
+    vertices within half_width_mm of z = z0 (default the middle of the volar z range) and within
+    half_length_mm of x = x0 (default 0), at least the nearest vertex."""
     import json
     from pathlib import Path
 
@@ -271,45 +348,69 @@ def line_load_model(model_dir, material=None, nu=None, position_x_mm=None, half_
         raise InputError(f"no mesh.vtu in '{model_dir}': run `pipeline.py mesh` first")
     t = Model.from_mesh(folder / "mesh.vtu", material=material or info.get("material", "m33338"),
                         nu=info.get("nu", 0.48) if nu is None else nu)
-    if t.dim != 2:
-        raise InputError("the large-deformation solver handles 2D plane-strain models only (3D is not "
-                         "implemented): mesh a cross-section with `pipeline.py mesh --section-z`")
-    x0 = info.get("params", {}).get("centroid_mm", [0.0])[0] if position_x_mm is None else float(position_x_mm)
-    sn = t.surface_nodes("surface")
+    sn = t.surface_nodes("surface" if t.dim == 2 else "volar")
     verts = sn.nodes[sn.nodes < t.mesh.nvertices]
-    dist = np.abs(t.mesh.p[0, verts] - x0)
-    load = verts[dist <= max(half_width_mm, dist.min() + 1e-9)]
+    x = t.mesh.p[:, verts]
+    if t.dim == 2:
+        x0 = info.get("params", {}).get("centroid_mm", [0.0])[0] if position_mm is None else float(position_mm[0])
+        pos = (x0, 0.0)
+        inside, score = np.abs(x[0] - x0) <= half_width_mm, np.abs(x[0] - x0)
+    else:
+        pos = (0.0, 0.5 * (x[2].min() + x[2].max())) if position_mm is None else tuple(map(float, position_mm))
+        inside = (np.abs(x[2] - pos[1]) <= half_width_mm) & (np.abs(x[0] - pos[0]) <= half_length_mm)
+        score = np.hypot(x[0] - pos[0], x[2] - pos[1])
+    load = verts[inside] if inside.any() else verts[[np.argmin(score)]]
     model = Model(t.mesh.p.T, t.mesh.t.T, t.layer, {**t.regions, "load": load}, material=t.material)
-    return model, x0
+    return model, pos
 
 
 def compare_line_load(model_dir, depths_mm=(0.05, 0.5, 1.0), material=None, nu=None, half_width_mm=0.0,
-                      step_mm: float = 0.1, position_x_mm=None) -> LineLoadComparison:
-    """Linear vs large-deformation surface deflection and force under a prescribed line load."""
-    model, x0 = line_load_model(model_dir, material, nu, position_x_mm, half_width_mm)
-    nl = NeoHookean2D(model)
-    sn = model.surface_nodes("surface")
-    order = np.argsort(sn.x[:, 0])
-    ydofs, xs = sn.dofs[order, 1], sn.x[order, 0]
+                      step_mm: float = 0.1, position_mm=None, slip: bool = False, half_length_mm: float = 1.0,
+                      band_mm: float = 0.25) -> LineLoadComparison:
+    """Linear vs large-deformation surface deflection and force under a prescribed line load
+    (each depth solved from zero in load steps of about step_mm)."""
+    import time
+
+    model, pos = line_load_model(model_dir, material, nu, position_mm, half_width_mm, half_length_mm)
+    nl = NeoHookean(model)
+    d = model.dim
+    sn = model.surface_nodes("surface" if d == 2 else "volar")
+    if d == 2:
+        along = sn.x[:, 0] - pos[0]
+        on = np.ones(len(along), bool)
+    else:
+        along = sn.x[:, 2] - pos[1]
+        on = np.abs(sn.x[:, 0] - pos[0]) <= band_mm
+    order = np.flatnonzero(on)[np.argsort(along[on])]
+    ydofs = sn.dofs[order, 1]
     load = model.node_dofs(model.region_nodes("load"))[:, 1]
-    lin, non, fl, fn, diff, newton, failed = [], [], [], [], [], [], {}
+    held = {k: v for k, v in HELD[d].items() if k in model.regions}
+    out = {k: [] for k in ("lin", "non", "fl", "fn", "diff", "J", "newton", "s")}
+    failed = {}
     for depth in depths_mm:
-        pres = {"fixed": 0.0, "load": (None, -float(depth))}
+        push = [None if slip else 0.0] * d
+        push[1] = -float(depth)
+        pres = {**held, "load": tuple(push)}
         ul = model.system(pres).u0
-        lin.append(-ul[ydofs])
-        fl.append(-float((model.K @ ul)[load].sum()))
+        out["lin"].append(-ul[ydofs])
+        out["fl"].append(-float((model.K @ ul)[load].sum()))
+        t0 = time.perf_counter()
         try:
             res = nl.solve(pres, steps=max(1, int(np.ceil(depth / step_mm - 1e-9))))
         except RuntimeError as exc:
             failed[float(depth)] = str(exc)
-            non.append(np.full(len(xs), np.nan))
-            fn.append(np.nan)
-            diff.append(np.nan)
-            newton.append([])
+            res = None
+        out["s"].append(time.perf_counter() - t0)
+        if res is None:
+            for k, v in (("non", np.full(len(ydofs), np.nan)), ("fn", np.nan), ("diff", np.nan), ("J", np.nan),
+                         ("newton", [])):
+                out[k].append(v)
             continue
-        non.append(-res.u[-1][ydofs])
-        fn.append(-float(res.reaction[-1][load].sum()))
-        diff.append(float(np.abs(non[-1] - lin[-1]).max() / depth))
-        newton.append(res.history[-1])
-    return LineLoadComparison(np.asarray(depths_mm, float), xs - x0, np.array(lin), np.array(non), np.array(fl),
-                              np.array(fn), np.array(diff), newton, failed)
+        out["non"].append(-res.u[-1][ydofs])
+        out["fn"].append(-float(res.reaction[-1][load].sum()))
+        out["diff"].append(float(np.abs(out["non"][-1] - out["lin"][-1]).max() / depth))
+        out["J"].append(float(res.min_J.min()))
+        out["newton"].append(res.history[-1])
+    return LineLoadComparison(np.asarray(depths_mm, float), along[order], np.array(out["lin"]), np.array(out["non"]),
+                              np.array(out["fl"]), np.array(out["fn"]), np.array(out["diff"]), np.array(out["J"]),
+                              out["newton"], np.array(out["s"]), failed)
