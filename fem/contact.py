@@ -47,6 +47,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
+from threadpoolctl import threadpool_limits
 
 from reconstruct.errors import InputError
 
@@ -55,6 +56,11 @@ GAP_TOL_MM = 1e-8
 FORCE_RTOL = 1e-6
 """Relative tolerance on prescribed forces."""
 MAX_DEPTH_MM = 5.0
+SERIAL_BLAS_BELOW = 1500
+"""Active sets smaller than this are factorised on one BLAS thread (measured: an 843-node Cholesky
+takes 0.013 s on one thread and 0.1-1.7 s on two when the other core is busy)."""
+CONDENSE_MAX_NODES = 8000
+"""Largest candidate set whose dense compliance `open_model` stores (8000 nodes: 0.5 GB, k^3 flops)."""
 
 
 # --------------------------------------------------------------------------- facets and pressure
@@ -127,6 +133,11 @@ class Compliance:
         self._ensure(idx)
         return self._store[self.m:, self._slot[idx]]
 
+    def observe(self, force_N) -> np.ndarray:
+        """(r,) observed response to nodal contact forces (m,): cached columns times the forces."""
+        act = np.flatnonzero(force_N)
+        return self.observed(act) @ force_N[act] if act.size else np.zeros(self.r)
+
 
 class MatrixCompliance(Compliance):
     """A given dense compliance (m, m) and optional observation response (r, m): analytic models."""
@@ -177,6 +188,35 @@ class FactorCompliance(Compliance):
         return np.asarray(self.solve((self.B @ force_N)[:, None])).reshape(-1)
 
 
+class CondensedCompliance(FactorCompliance):
+    """The whole compliance at once from a system factorised with `condense=` on the candidates'
+    DOFs along an approach that is a coordinate axis (`LinearSystem.compliance`: the inverse of
+    their Schur complement, no solves); observations take one solve per indentation instead of
+    cached columns. Same arguments as FactorCompliance, with the LinearSystem for `solve`."""
+
+    def __init__(self, system, n_dofs: int, dofs, direction, observe=None):
+        super().__init__(system.solve, n_dofs, dofs, direction, observe)
+        axis = condensed_axis(direction, np.asarray(dofs).shape[1])
+        self._C = system.compliance(np.asarray(dofs)[:, axis])     # sign^2 = 1: C is the same for -a
+
+    def columns(self, idx) -> np.ndarray:
+        return self._C[:, np.asarray(idx, int)]
+
+    def observed(self, idx) -> np.ndarray:
+        raise NotImplementedError("a condensed compliance observes whole force vectors: use observe()")
+
+    def observe(self, force_N) -> np.ndarray:
+        """(r,) observed response to nodal contact forces (m,): one solve."""
+        return self.O[self.m:] @ self.displacement(force_N) if self.r else np.zeros(0)
+
+
+def condensed_axis(direction, dim) -> int | None:
+    """Coordinate axis the approach direction (3,) lies along (within 1e-12), else None."""
+    a = np.abs(np.asarray(direction, float))
+    k = int(np.argmax(a))
+    return k if k < dim and a[k] > 1 - 1e-12 else None
+
+
 # --------------------------------------------------------------------------- LCP
 @dataclass
 class LCPSolution:
@@ -204,8 +244,9 @@ def solve_lcp(columns, q, start=None, tol_mm: float = GAP_TOL_MM, max_iter: int 
         factor = None
         if idx.size:
             cols = columns(idx)
-            factor = sla.cho_factor(cols[idx], lower=True)
-            f[idx] = sla.cho_solve(factor, -q[idx])
+            with threadpool_limits(1 if idx.size < SERIAL_BLAS_BELOW else None, user_api="blas"):
+                factor = sla.cho_factor(cols[idx], lower=True)
+                f[idx] = sla.cho_solve(factor, -q[idx])
             g = q + cols @ f[idx]
         else:
             g = q.copy()
@@ -239,7 +280,7 @@ class ContactResult:
     part: np.ndarray                # (m,) index of the indentor part facing each node
     pressure_MPa: np.ndarray        # (m,) contact pressure (facet-averaged nodal force / area)
     area_mm2: np.ndarray            # (m,) tributary areas
-    observed: np.ndarray            # (r,) observation operator applied to the displacement
+    observed: np.ndarray | None     # (r,) observation operator applied to the displacement (once final)
     kkt: dict = field(default_factory=dict)
 
     @property
@@ -309,8 +350,12 @@ class ContactModel:
             size = 0.5 * np.linalg.norm(np.cross((x[:, 1] - x[:, 0]).T, (x[:, 2] - x[:, 0]).T), axis=1)
         else:
             size = np.linalg.norm(x[:, 1] - x[:, 0], axis=0)
-        return cls.from_solver(system.solve, model.ndof, sn.x, sn.dofs, sn.area, observe=observe,
-                               chunk=chunk, facets=(facets, facet_shares(facets, size, model.dim)), **kw)
+        def compliance_for(a):
+            axis = condensed_axis(a, model.dim)
+            if axis is not None and np.isin(sn.dofs[:, axis], np.r_[system.condensed, system.fixed]).all():
+                return CondensedCompliance(system, model.ndof, sn.dofs, a, observe=observe)
+            return FactorCompliance(system.solve, model.ndof, sn.dofs, a, observe=observe, chunk=chunk)
+        return cls(sn.x, sn.area, compliance_for, facets=(facets, facet_shares(facets, size, model.dim)), **kw)
 
     @classmethod
     def from_solver(cls, solve, n_dofs, points_mm, dofs, areas_mm2, observe=None, chunk=64, **kw):
@@ -349,7 +394,6 @@ class ContactModel:
         f[sub] = lcp.force
         act = sub[lcp.active]
         w = comp.columns(act) @ f[act] if act.size else np.zeros(m)
-        obs = comp.observed(act) @ f[act] if act.size else np.zeros(comp.r)
         g = gap0 + w
         if self.facets is not None:
             pressure = smoothed_pressure(f, *self.facets)
@@ -358,7 +402,7 @@ class ContactModel:
                 pressure = np.where(f > 0, f / self.areas_mm2, 0.0)
         t0 = self.first_touch_mm(indentor)
         res = ContactResult(indentor.name, travel - t0, travel.copy(), f, g, w, part, pressure,
-                            self.areas_mm2, obs, _kkt(f[sub], g[sub], self.tol_mm))
+                            self.areas_mm2, None, _kkt(f[sub], g[sub], self.tol_mm))
         res.kkt["iterations"] = lcp.iterations
         return res, lcp, sub
 
@@ -374,8 +418,7 @@ class ContactModel:
             if depth_mm < 0:
                 raise InputError(f"depth must be >= 0 mm, got {depth_mm}")
             res, lcp, sub = self.solve_travel(indentor, t0.min() + depth_mm, self._warm)
-            self._remember(res)
-            return res
+            return self._finish(res, indentor)
         return self._force(indentor, float(force_N), equal_force, max_depth_mm, t0)
 
     def indent_depths(self, indentor, depths_mm) -> list[ContactResult]:
@@ -394,8 +437,11 @@ class ContactModel:
                 raise InputError(f"sweep position {np.round(off, 4).tolist()} mm: {exc}") from None
         return out
 
-    def _remember(self, res):
+    def _finish(self, res, indentor) -> ContactResult:
+        """Warm start for the next indentation; observations of the final contact forces."""
         self._warm = res.force_N > 0
+        res.observed = self.compliance(indentor.approach).observe(res.force_N)
+        return res
 
     def _force(self, indentor, target, equal_force, max_depth_mm, t0):
         """Newton on the depth(s) with the exact Jacobian of the current active set, safeguarded:
@@ -415,10 +461,9 @@ class ContactModel:
             warm = res.force_N > 0
             err = (res.part_force_N if equal_force else np.array([res.total_force_N])) - target
             if np.all(np.abs(err) <= FORCE_RTOL * target):
-                self._remember(res)
                 self._force_depth = float(depth.mean())
                 res.kkt["force_iterations"] = it
-                return res
+                return self._finish(res, indentor)
             if np.any((depth >= max_depth_mm) & (err < 0)):
                 raise InputError(f"force {target} N is not reached within {max_depth_mm} mm depth "
                                  f"(force there {np.round(err + target, 6).tolist()} N): lower the force "
@@ -525,7 +570,9 @@ def open_model(model_dir, material=None, nu=None):
     else:
         prescribed, region = {"fixed": 0.0}, "surface"
     prescribed = {k: v for k, v in prescribed.items() if k in model.regions}
-    return model, model.system(prescribed), region, info
+    sn = model.surface_nodes(region)                # vertical approach: condense the candidates' y DOFs
+    condense = sn.dofs[:, 1] if len(sn.nodes) <= CONDENSE_MAX_NODES else None
+    return model, model.system(prescribed, condense=condense), region, info
 
 
 def run_scene(model_dir, out_dir, scene: dict, progress: bool = True) -> str:

@@ -62,6 +62,7 @@ from functools import cached_property
 from pathlib import Path
 
 import numpy as np
+import scipy.linalg as sla
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 from scipy.sparse.linalg import LinearOperator
@@ -100,9 +101,16 @@ class _Pardiso:
     2.5x slower re-solves). Here iparm is set explicitly (the defaults for mtype -2, METIS nested
     dissection, 1e-8 pivot perturbation, Bunch-Kaufman within supernodes) except that PARDISO's
     refinement is off: _Factor refines on K_ff itself, only when a residual asks for it.
+
+    schur: optional sorted (k,) row indices. PARDISO then orders them last and returns the dense
+    Schur complement S = A_SS - A_SI A_II^-1 A_IS (k, k) with a partial factorisation of the rest
+    (iparm[35] = 2); a solve is forward substitution (phase 331, which leaves the reduced
+    right-hand side in the Schur rows), a dense Cholesky solve with S there, and backward
+    substitution (phase 333). Measured on the 97k-DOF monkey model with k = 1945: factorisation
+    8.4 s against 9.6 s without, factor non-zeros 94M against 84M.
     """
 
-    def __init__(self, A: sp.csr_matrix):
+    def __init__(self, A: sp.csr_matrix, schur: np.ndarray | None = None):
         from pypardiso import PyPardisoSolver
 
         A.sort_indices()
@@ -119,7 +127,18 @@ class _Pardiso:
         ip[9] = 8       # pivot perturbation 1e-8 (mtype -2 default)
         ip[17] = -1     # report nnz(L) in iparm[17]
         ip[20] = 1      # Bunch-Kaufman pivoting (mtype -2 default)
-        self._phase(12, np.zeros(1), np.zeros(1), 1)    # analysis + numerical factorisation
+        self._schur_factor = None      # (Cholesky factor of S, lower) when schur rows are given
+        if schur is None or len(schur) == 0:
+            self._phase(12, np.zeros(1), np.zeros(1), 1)    # analysis + numerical factorisation
+        else:
+            ip[35] = 2                                      # Schur complement + partial factorisation
+            ps.perm = np.zeros(self.n, dtype=np.int32)
+            ps.perm[schur] = 1
+            self._rows = np.asarray(schur)
+            S = np.zeros((len(schur), len(schur)), order="F")     # symmetric: either order
+            self._phase(11, np.zeros(1), np.zeros(1), 1)
+            self._phase(22, np.zeros(1), S, 1)
+            self._schur_factor = sla.cho_factor(S, lower=True, overwrite_a=True)
         self.nnz_factor = int(ip[17])
 
     def _phase(self, phase, b, x, nrhs):
@@ -142,8 +161,16 @@ class _Pardiso:
     def solve(self, b: np.ndarray) -> np.ndarray:
         """x with A x = b; b (n,) or (n, k) float64, Fortran-ordered (not modified)."""
         x = np.zeros_like(b, order="F")
-        if x.size:                                      # PARDISO rejects nrhs = 0
-            self._phase(33, b, x, 1 if b.ndim == 1 else b.shape[1])
+        if not x.size:                                  # PARDISO rejects nrhs = 0
+            return x
+        nrhs = 1 if b.ndim == 1 else b.shape[1]
+        if self._schur_factor is None:
+            self._phase(33, b, x, nrhs)
+            return x
+        y = np.zeros_like(b, order="F")
+        self._phase(331, b, y, nrhs)
+        y[self._rows] = sla.cho_solve(self._schur_factor, y[self._rows])
+        self._phase(333, y, x, nrhs)
         return x
 
     def __del__(self):
@@ -151,7 +178,6 @@ class _Pardiso:
             self._phase(-1, np.zeros(1), np.zeros(1), 1)    # release PARDISO's memory
         except Exception:  # noqa: BLE001  (interpreter shutdown, failed factorisation)
             pass
-
 
 class _Factor:
     """Factorised constrained system, reused for many right-hand sides.
@@ -167,15 +193,21 @@ class _Factor:
     on K_ff. A step that gains less than 10x ends the refinement and raises this factor's tolerance
     to 10x the residual reached, so later solves skip refinement that does not help (round-off
     limited systems, e.g. the fingertip with moduli 1e4 apart).
+
+    condensed: optional sorted (k,) indices into the free DOFs whose compliance block
+    (K_ff^-1 restricted to them, `compliance_block`) is wanted: PARDISO then returns the Schur
+    complement onto them with the factorisation (see `_Pardiso`); the SciPy fallback ignores it.
     """
 
     REFINE_TOL = 1e-10
     MAX_REFINE = 2
 
-    def __init__(self, Kdev: sp.csr_matrix, B: sp.csr_matrix, D: np.ndarray):
+    def __init__(self, Kdev: sp.csr_matrix, B: sp.csr_matrix, D: np.ndarray, condensed=None):
         self.Kdev, self.B, self.D = Kdev, B, D
         self.refinements = 0        # refinement steps taken by the last call
         self.refine_tol = self.REFINE_TOL
+        self.condensed = np.zeros(0, dtype=int)
+        self._block = None
         A = sp.bmat([[Kdev, B.T], [B, -sp.diags(D)]], format="csr")
         try:
             from pypardiso import PyPardisoSolver  # noqa: F401  (availability check)
@@ -186,12 +218,29 @@ class _Factor:
             from scipy.sparse.linalg import splu
             self.backend, self._solve = "scipy-splu", splu(A.tocsc()).solve
             return
-        try:
-            self._pardiso = _Pardiso(sp.triu(A, format="csr"))   # symmetric types read the upper triangle
-        except PyPardisoError as exc:
+        try:                                # symmetric types read the upper triangle
+            self._pardiso = _Pardiso(sp.triu(A, format="csr"), condensed)
+        except (PyPardisoError, np.linalg.LinAlgError) as exc:
             raise InputError(f"the stiffness matrix is singular ({exc}); check that every part of the "
                              "mesh is held") from None
         self.backend, self._solve = "pardiso", self._pardiso.solve
+        if self._pardiso._schur_factor is not None:
+            self.condensed = np.asarray(condensed)
+
+    def compliance_block(self) -> np.ndarray:
+        """(k, k) K_ff^-1 restricted to the `condensed` DOFs: the inverse of their Schur complement
+        (LAPACK potri on its Cholesky factor, k^3 flops; computed once)."""
+        if self._block is None:
+            c, info = sla.lapack.dpotri(self._pardiso._schur_factor[0], lower=1)
+            if info:
+                raise np.linalg.LinAlgError(f"potri failed ({info})")
+            for a in range(0, len(c), 1024):            # mirror the lower triangle, in blocks
+                b = min(a + 1024, len(c))
+                c[a:b, b:] = c[b:, a:b].T
+                d = c[a:b, a:b]
+                d[:] = np.tril(d) + np.tril(d, -1).T
+            self._block = c
+        return self._block
 
     def apply(self, x: np.ndarray) -> np.ndarray:
         """K_ff x."""
@@ -250,6 +299,7 @@ class LinearSystem:
     def __init__(self, model: "Model", fixed: np.ndarray, values: np.ndarray, factor: _Factor):
         self.model, self.fixed, self.values, self._factor = model, fixed, values, factor
         self.free = np.setdiff1d(np.arange(model.ndof), fixed)
+        self.condensed = self.free[factor.condensed]    # global DOFs with a stored compliance block
         self.backend = factor.backend
         self.u0 = np.zeros(model.ndof)
         self.u0[fixed] = values
@@ -273,6 +323,22 @@ class LinearSystem:
         u = np.zeros(f.shape)
         u[self.free] = self._solve_free(f[self.free])
         return u
+
+    def compliance(self, dofs) -> np.ndarray:
+        """(k, k) exact compliance [mm/N] between global DOFs (k,): u[dofs] = C @ f[dofs] for loads
+        on those DOFs; zero rows and columns for constrained DOFs. Every free DOF in `dofs` must be
+        in `condensed` (ask `Model.system(..., condense=dofs)`); no solves are needed then."""
+        dofs = np.asarray(dofs)
+        pos = np.searchsorted(self.condensed, dofs)
+        held = np.isin(dofs, self.fixed)
+        ok = held | ((pos < len(self.condensed)) & (self.condensed[np.minimum(pos, len(self.condensed) - 1)] == dofs))
+        if not ok.all():
+            raise ValueError(f"{int((~ok).sum())} DOFs have no stored compliance: factorise with condense=")
+        C = np.zeros((len(dofs), len(dofs)))
+        if (~held).any():
+            i = np.flatnonzero(~held)
+            C[np.ix_(i, i)] = self._factor.compliance_block()[np.ix_(pos[i], pos[i])]
+        return C
 
     def displacement(self, f: np.ndarray | None = None) -> np.ndarray:
         """u0 + solve(f); sets `residual` to that of the combined system."""
@@ -651,15 +717,21 @@ class Model:
                                  + (f" of mesh part {c + 1}" if len(np.unique(label[t])) > 1 else "")
                                  + "; prescribe displacements on a region, e.g. prescribed={'nail': 0.0}")
 
-    def system(self, prescribed=None) -> LinearSystem:
-        """Factorised system for these constraints (cached per set of constrained DOFs)."""
+    def system(self, prescribed=None, condense=None) -> LinearSystem:
+        """Factorised system for these constraints (cached per set of constrained DOFs; one kept).
+
+        condense: optional global DOF indices whose exact compliance block the system should hold
+        (`LinearSystem.compliance`), e.g. the approach-direction DOFs of contact candidates; it
+        comes with the factorisation at about its cost (up to ~7,000 DOFs: the block is dense)."""
         fixed, values = self._constraints(prescribed)
+        free = np.setdiff1d(np.arange(self.ndof), fixed)
+        want = np.intersect1d(free, np.asarray([] if condense is None else condense, dtype=int))
         key = fixed.tobytes()
-        if key not in self._factors:
+        have = self._factors.get(key)
+        if have is None or not np.isin(want, free[have.condensed]).all():
             self._check_held(fixed)
-            free = np.setdiff1d(np.arange(self.ndof), fixed)
-            self._factors = {key: _Factor(self.K_dev[free][:, free], self._B[:, free],     # keep one
-                                          self.pressure_compliance)}
+            self._factors = {key: _Factor(self.K_dev[free][:, free], self._B[:, free],
+                                          self.pressure_compliance, np.searchsorted(free, want))}
         return LinearSystem(self, fixed, values, self._factors[key])
 
     def solve(self, prescribed=None, tractions=None, pressures=None, forces=None, point_forces=None,

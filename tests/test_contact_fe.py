@@ -63,6 +63,33 @@ def test_condensed_matches_full_resolve_and_receptor_strains():
         assert res.active.sum() > 5 and res.kkt["ok"]
 
 
+@pytest.mark.parametrize("dim", [2, 3])
+def test_condensed_compliance_equals_lazy_columns(dim):
+    """A system factorised with the candidates' approach DOFs condensed gives the same indentation
+    (forces, deflections, receptor strains) as lazily solved columns, with no column solves; an
+    inclined approach on it falls back to lazy columns."""
+    if dim == 2:
+        model, _ = half_plane(0.48, fine_mm=0.05, size_mm=20.0)
+        prescribed, ind = {"bottom": 0.0, "sym": (0.0, None)}, make_indentor("C2", orientation="parallel")
+    else:
+        model, _ = quarter_block(0.48, 0.25, 4.0)
+        prescribed, ind = {"bottom": 0.0, "symx": (0.0, None, None), "symz": (None, None, 0.0)}, make_indentor("sphere:5")
+    sn = model.surface_nodes("top")
+    receptors = model.strain_operator(sn.x[:7] - [0.0, 0.75, 0.0][:dim])
+    lazy = ContactModel.from_fe(model, model.system(prescribed), "top", observe=receptors)
+    a = lazy.indent(ind, depth_mm=0.2)
+    system = model.system(prescribed, condense=sn.dofs[:, 1])
+    condensed = ContactModel.from_fe(model, system, "top", observe=receptors)
+    b = condensed.indent(ind, depth_mm=0.2)
+    assert type(condensed.compliance(ind.approach)).__name__ == "CondensedCompliance"
+    assert a.active.sum() > 3 and np.array_equal(a.active, b.active)
+    for x, y in [(a.force_N, b.force_N), (a.deflection_mm, b.deflection_mm), (a.observed, b.observed)]:
+        assert np.abs(x - y).max() < 1e-9 * np.abs(x).max()
+    if dim == 3:
+        tilted = make_indentor("sphere:5", incline_deg=30.0)
+        assert type(condensed.compliance(tilted.approach)).__name__ == "FactorCompliance"
+
+
 def test_receptor_grid_measures_match_solver_sampling():
     """Receptor measures from the cached operator equal the solver's own sampling of the full field."""
     from fem.receptors import ReceptorSampler, receptor_grid
