@@ -355,13 +355,13 @@ def build_model(z_mm, polygons, params: ModelParams = ModelParams(), preset: str
     if np.any(np.diff(z) <= 0):
         raise InputError("section z values must be strictly increasing (sort them, remove duplicates)")
     polys = [check_polygon(p, f"section at z={zi:g} mm") for zi, p in zip(z, polygons)]
-    N = params.n_theta
     ref_z = [float(np.interp(f, [0, 1], [z[0], z[-1]])) for f in (0.25, 0.5, 0.75)]
     middle_width = float(np.interp(ref_z[1], z, [np.ptp(p[:, 0]) for p in polys]))
     unset = [k for k in SIZED_PARAMS if getattr(params, k) is None
              and not (k == "layer3_mm" and params.layer3_scale is not None)]
     chosen = {k: v for k, v in size_defaults(middle_width).items() if k in unset}
     params = replace(params, **chosen)
+    N = params.n_theta
     theta = 2 * np.pi * np.arange(N) / N
     u = np.column_stack([np.cos(theta), np.sin(theta)])
     skin = (0.0, params.epidermis_mm, params.epidermis_mm + params.dermis_mm)
@@ -406,7 +406,6 @@ def build_model(z_mm, polygons, params: ModelParams = ModelParams(), preset: str
     return LayeredModel(z, rings, cents, params, preset, sections_sha256, derived)
 
 
-def _centroid(p: np.ndarray) -> np.ndarray:
 def size_defaults(middle_width_mm: float) -> dict:
     """{layer3_mm, bone_offset_mm} for sections of this width (mm) at the middle reference section:
     linear in the width between the monkey and human presets' values at their middle widths
@@ -417,6 +416,7 @@ def size_defaults(middle_width_mm: float) -> dict:
             for k in SIZED_PARAMS}
 
 
+def _centroid(p: np.ndarray) -> np.ndarray:
     x, y = p[:, 0], p[:, 1]
     cr = x * np.roll(y, -1) - np.roll(x, -1) * y
     a = cr.sum() / 2
