@@ -206,9 +206,9 @@ class IndentRun:
 
         align (sweeps along x; a single indentation is never moved): the site's profile is
         translated by receptor_x_mm - site x, i.e.
-        it stands for a receptor exactly at receptor_x_mm (the sites of an `indent` grid are
-        cells of its spacing, the most central one 0.2 mm off x = 0 on the 2D cylinders; two runs
-        of different diameters then describe the same receptor)."""
+        it stands for a receptor exactly at receptor_x_mm (the sites of an `indent` grid are the
+        surface nodes nearest the centres of cells of its spacing, 0.015 mm off x = 0 on the 2D
+        cylinders; two runs of different diameters then describe the same receptor)."""
         d = self._load(stimulus)
         depth = d["depths"][np.argmin(np.abs(d["depths"] - depth_mm))]
         s = self.site_index(stimulus, receptor_x_mm) if site is None else site
