@@ -302,6 +302,68 @@ def _run_fit_material(args):
         print(text)
 
 
+def _add_line_load(sub):
+    p = sub.add_parser("line-load", help="surface deflection and force under a prescribed line load (thesis "
+                                         "6.2.1); --large-deformation adds the neo-Hookean solve and compares")
+    p.add_argument("model", help="model folder with mesh.vtu (+ model.json) from `pipeline.py mesh` (2D or 3D)")
+    p.add_argument("--depth", default="0.05,0.5,1,2", help="depth(s) in mm: value, list or start:stop:step "
+                                                          "(default 0.05,0.5,1,2)")
+    p.add_argument("--material", help="material code mABCDE (default: the model's)")
+    p.add_argument("--nu", type=float, help="Poisson ratio (default: the model's)")
+    p.add_argument("--large-deformation", action="store_true",
+                   help="also solve the nearly incompressible neo-Hookean model (Newton, load steps)")
+    p.add_argument("--slip", action="store_true", help="loaded nodes free sideways (default: they move with the wedge)")
+    p.add_argument("--half-width", type=float, default=0.25,
+                   help="loaded patch: surface nodes within this distance of the load line, mm (default 0.25)")
+    p.add_argument("--half-length", type=float, default=1.0,
+                   help="3D: loaded strip half length across the finger, mm (default 1)")
+    p.add_argument("--step", type=float, default=0.1, help="load step of the nonlinear solve, mm (default 0.1)")
+    p.add_argument("--position", type=float, nargs=2, metavar=("X", "Z"),
+                   help="load position in mm (2D: X; default the middle of the pad)")
+    p.add_argument("--out", help="output folder (default: <model>/line_load)")
+    p.add_argument("--quiet", action="store_true", help="no summary")
+    p.set_defaults(run=_run_line_load)
+
+
+def _run_line_load(args):
+    from fem.biomech import run_line_load
+
+    text = run_line_load(args.model, args.out or str(Path(args.model) / "line_load"), depths=args.depth,
+                         material=args.material, nu=args.nu, large_deformation=args.large_deformation,
+                         slip=args.slip, half_width_mm=args.half_width, half_length_mm=args.half_length,
+                         step_mm=args.step, position_mm=args.position)
+    if not args.quiet:
+        print(text)
+
+
+def _add_contact_series(sub):
+    p = sub.add_parser("contact-series", help="cylinders C1-C8 at constant force or depth: contact area (2D: "
+                                              "width) and max pressure vs diameter (thesis figs. 4-25, 5-14)")
+    p.add_argument("model", help="model folder with mesh.vtu (+ model.json) from `pipeline.py mesh` (2D or 3D)")
+    p.add_argument("--force", help="constant force(s) in N (N/mm for 2D models): value, list or start:stop:step")
+    p.add_argument("--depth", help="or constant depth(s) in mm")
+    p.add_argument("--cylinders", help="cylinder codes, e.g. C1,C3,C5 (default C1-C8)")
+    p.add_argument("--material", help="material code mABCDE (default: the model's)")
+    p.add_argument("--axis", "--orientation", dest="orientation",
+                   help="cylinder axis (default: parallel in 2D, perpendicular to the finger in 3D)")
+    p.add_argument("--position", type=float, nargs=2, metavar=("X", "Z"),
+                   help="load position on the pad in mm (default: the middle of the pad)")
+    p.add_argument("--nu", type=float, help="Poisson ratio (default: the model's)")
+    p.add_argument("--out", help="output folder (default: <model>/contact_series)")
+    p.add_argument("--quiet", action="store_true", help="no summary")
+    p.set_defaults(run=_run_contact_series)
+
+
+def _run_contact_series(args):
+    from fem.biomech import run_contact_series
+
+    text = run_contact_series(args.model, args.out or str(Path(args.model) / "contact_series"),
+                              material=args.material, cylinders=args.cylinders, forces=args.force,
+                              depths=args.depth, orientation=args.orientation, position_mm=args.position, nu=args.nu)
+    if not args.quiet:
+        print(text)
+
+
 # --------------------------------------------------------------------------- analyze
 def _add_analyze(sub):
     p = sub.add_parser("analyze", help="fit the linear receptor model d = a S + b to recorded rates: "
@@ -361,7 +423,8 @@ def _run_run(args):
 
 
 # --------------------------------------------------------------------------- main
-COMMANDS = [_add_reconstruct, _add_render, _add_mesh, _add_indent, _add_study_layers, _add_fit_material, _add_analyze, _add_run]
+COMMANDS = [_add_reconstruct, _add_render, _add_mesh, _add_indent, _add_study_layers, _add_fit_material,
+            _add_line_load, _add_contact_series, _add_analyze, _add_run]
 
 
 def build_parser() -> argparse.ArgumentParser:

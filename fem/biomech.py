@@ -184,23 +184,38 @@ class DeflectionExperiment:
             pos, orient = (0.0, 0.5 * (sn.x[:, 2].min() + sn.x[:, 2].max())), "perpendicular"
             up = info.get("regions", {}).get("support", {}).get("vertical_up")
             place = {} if up is None else {"approach": -np.asarray(up, float)}
-        from fem.indentors import make_indentor
-
-        self.indentor = make_indentor(indentor, orientation=orientation or orient,
-                                      position_mm=tuple(position_mm) if position_mm is not None else pos, **place)
+        self._placement = {"orientation": orientation or orient,
+                           "position_mm": tuple(position_mm) if position_mm is not None else pos, **place}
+        self.indentor = self.indentor_for(indentor)
         self._cache: dict = {}        # ratio key -> {"log10_Pa", "depth": {depth: ContactResult}}
         self._solvers: dict = {}      # ratio key -> ContactModel, least recently used first
         self.max_factors = max(1, int(max_factors))
         self.evaluations = 0          # factorisations done (distinct modulus ratios, plus rebuilds)
 
-    def _results(self, log10_Pa, depths_mm):
+    def indentor_for(self, code: str):
+        """Indentor `code` placed as this experiment's (orientation, position, approach)."""
+        from fem.indentors import make_indentor
+
+        return make_indentor(code, **self._placement)
+
+    def contact_model(self, log10_Pa):
+        """(fem.contact.ContactModel of these modulus ratios, force factor): forces and pressures
+        of its results times the factor are those of log10_Pa (same ratios, another scale)."""
+        key, entry, scale = self._entry(log10_Pa)
+        return self._solver(key, entry["log10_Pa"]), scale
+
+    def _entry(self, log10_Pa):
+        """(ratio key, cache entry, force factor of log10_Pa against the entry's moduli)."""
         log10_Pa = np.asarray(log10_Pa, float)
         if log10_Pa.size != self.n_layers:
             raise InputError(f"the model has {self.n_layers} layers; give {self.n_layers} moduli "
                              f"(a code with {self.n_layers} digits)")
         key = ratio_key(log10_Pa)
         entry = self._cache.setdefault(key, {"log10_Pa": log10_Pa.copy(), "depth": {}})
-        scale = 10.0 ** (log10_Pa[0] - entry["log10_Pa"][0])     # forces scale with the common factor
+        return key, entry, 10.0 ** (log10_Pa[0] - entry["log10_Pa"][0])     # forces scale with the common factor
+
+    def _results(self, log10_Pa, depths_mm):
+        key, entry, scale = self._entry(log10_Pa)
         out = []
         for d in depths_mm:
             d = float(d)
@@ -602,6 +617,56 @@ def fit_force_scale(model_N, measured_N, log10_Pa, depths_mm, match: str = "leas
     return ForceScale(s, v, np.asarray(depths_mm, float), M, F, float(np.sqrt(np.mean((s * F - M) ** 2))), match)
 
 
+# --------------------------------------------------------------------------- cylinder series (thesis figs. 4-24, 4-25, 5-14)
+@dataclass
+class CylinderSeries:
+    """Cylindrical indentors of increasing diameter on one model, at constant forces or depths.
+
+    diameters_mm (k,); loads (j,) the prescribed forces [N; N/mm in 2D] or depths [mm] (load_kind
+    'force' or 'depth'); per (j, k): depth_mm, force_N, contact_area_mm2 (2D: contact width in
+    mm), max_pressure_MPa (facet-averaged, fem.contact). The thesis: at constant force a larger
+    cylinder makes a wider contact and a lower peak pressure (fig. 4-25, 2D), and at a fixed depth
+    a larger contact area (fig. 5-14, human fingertip)."""
+    codes: list
+    diameters_mm: np.ndarray
+    load_kind: str
+    loads: np.ndarray
+    depth_mm: np.ndarray
+    force_N: np.ndarray
+    contact_area_mm2: np.ndarray
+    max_pressure_MPa: np.ndarray
+
+    def report(self) -> dict:
+        return {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in self.__dict__.items()}
+
+
+def cylinder_series(exp: DeflectionExperiment, material, codes=None, forces_N=None, depths_mm=None) -> CylinderSeries:
+    """Contact of the catalogue cylinders `codes` (default C1-C8, thesis table 5.1) placed as the
+    experiment's indentor, at each force or each depth (one of the two), for a material (code or
+    log10 moduli in Pa). One factorisation; the compliance columns are shared by all cylinders."""
+    from fem.indentors import CYLINDERS_MM
+
+    if (forces_N is None) == (depths_mm is None):
+        raise InputError("give forces or depths for the cylinder series, not both")
+    codes = list(CYLINDERS_MM) if codes is None else [str(c).strip().upper() for c in codes]
+    unknown = [c for c in codes if c not in CYLINDERS_MM]
+    if unknown or not codes:
+        raise InputError(f"unknown cylinder code(s) {unknown}: use {', '.join(CYLINDERS_MM)}")
+    kind, loads = ("force", forces_N) if forces_N is not None else ("depth", depths_mm)
+    loads = np.asarray(loads, float).ravel()
+    if not loads.size or np.any(loads <= 0):
+        raise InputError(f"cylinder series {kind}s must be positive, got {loads.tolist()}")
+    cm, scale = exp.contact_model(_as_log10(material, exp.n_layers))
+    out = np.zeros((4, len(loads), len(codes)))
+    for k, code in enumerate(codes):
+        ind = exp.indentor_for(f"cylinder:{code}")
+        for j, v in enumerate(loads):
+            res = cm.indent(ind, force_N=v / scale) if kind == "force" else cm.indent(ind, depth_mm=v)
+            out[:, j, k] = (res.depth_mm.max(), scale * res.total_force_N, res.contact_area_mm2,
+                            scale * res.max_pressure_MPa)
+    return CylinderSeries(codes, np.array([CYLINDERS_MM[c] for c in codes]), kind, loads, *out)
+
+
 # --------------------------------------------------------------------------- command back ends
 def _parse_ints(text, what) -> list[int]:
     try:
@@ -825,4 +890,120 @@ def run_fit_material(model_dir, out_dir, deflection_csv=None, force_csv=None, ke
                      + ", ".join(f"{10 ** v:.3g}" for v in scale.log10_Pa)
                      + f" Pa (nearest code {code_of(scale.log10_Pa)}), rms {scale.rms_N:.3g} "
                      + ("N/mm" if exp.dim == 2 else "N"))
+    return "\n".join(lines)
+
+
+def run_contact_series(model_dir, out_dir, material=None, cylinders=None, forces=None, depths=None,
+                       orientation=None, position_mm=None, nu=None) -> str:
+    """`pipeline.py contact-series`: cylinder_series.csv / .json / .png in out_dir."""
+    import time
+
+    from reconstruct.io import staged_output, write_json
+
+    if (forces is None) == (depths is None):
+        raise InputError("contact-series needs --force or --depth (one of the two)")
+    t0 = time.perf_counter()
+    loads = _parse_floats(forces if forces is not None else depths, "forces" if forces is not None else "depths")
+    codes = None if cylinders is None else [c for c in str(cylinders).replace(" ", "").split(",") if c]
+    exp = _experiment(model_dir, "wedge", orientation, position_mm, nu, "mean")
+    material = material or exp.info.get("material", "m43338")
+    s = cylinder_series(exp, material, codes, **({"forces_N": loads} if forces is not None else {"depths_mm": loads}))
+    unit = "N per mm (2D plane strain)" if exp.dim == 2 else "N"
+    area = "contact width, mm" if exp.dim == 2 else "contact area, mm^2"
+    plt = _plt()
+    with staged_output(out_dir) as tmp:
+        rows = [[c, float(dm), s.load_kind, float(v), float(s.depth_mm[j, k]), float(s.force_N[j, k]),
+                 float(s.contact_area_mm2[j, k]), float(s.max_pressure_MPa[j, k])]
+                for j, v in enumerate(s.loads) for k, (c, dm) in enumerate(zip(s.codes, s.diameters_mm))]
+        _write_csv(tmp / "cylinder_series.csv", ["code", "diameter_mm", "load", "load_value", "depth_mm", "force_N",
+                                                 "contact_area_mm2", "max_pressure_MPa"], rows)
+        write_json(tmp / "cylinder_series.json", {"model": str(model_dir), "material": material, "force_unit": unit,
+                                                  "contact_area_unit": "mm (width, 2D)" if exp.dim == 2 else "mm^2",
+                                                  **s.report(), "seconds": round(time.perf_counter() - t0, 2)})
+        fig, ax = plt.subplots(1, 3, figsize=(14, 4))
+        for j, v in enumerate(s.loads):
+            lab = f"{v:g} " + ("N" if s.load_kind == "force" else "mm")
+            ax[0].plot(s.diameters_mm, s.contact_area_mm2[j], "o-", label=lab)
+            ax[1].plot(s.diameters_mm, s.max_pressure_MPa[j], "o-", label=lab)
+            ax[2].plot(s.diameters_mm, s.depth_mm[j] if s.load_kind == "force" else s.force_N[j], "o-", label=lab)
+        ax[0].set(xlabel="cylinder diameter, mm", ylabel=area, title=f"contact vs diameter at constant {s.load_kind}")
+        ax[1].set(xlabel="cylinder diameter, mm", ylabel="max contact pressure, MPa", title="peak pressure")
+        ax[2].set(xlabel="cylinder diameter, mm", ylabel="depth, mm" if s.load_kind == "force" else f"force, {unit}",
+                  title="depth needed" if s.load_kind == "force" else "force needed")
+        for a in ax:
+            a.legend(fontsize=7)
+        fig.tight_layout()
+        fig.savefig(tmp / "cylinder_series.png", dpi=100)
+        plt.close(fig)
+    lines = [f"cylinder series {', '.join(s.codes)} ({material}, constant {s.load_kind}) in {out_dir} "
+             f"({time.perf_counter() - t0:.1f} s)"]
+    for j, v in enumerate(s.loads):
+        lines.append(f"  {v:g} {'N' if s.load_kind == 'force' else 'mm'}: {area} "
+                     + " ".join(f"{a:.3g}" for a in s.contact_area_mm2[j]) + "; max pressure MPa "
+                     + " ".join(f"{p:.3g}" for p in s.max_pressure_MPa[j]))
+    return "\n".join(lines)
+
+
+def run_line_load(model_dir, out_dir, depths="0.05,0.5,1,2", material=None, nu=None, large_deformation=False,
+                  slip=False, half_width_mm=0.25, half_length_mm=1.0, step_mm=0.1, position_mm=None) -> str:
+    """`pipeline.py line-load`: line_load.csv / .json / .png in out_dir (linear; with
+    large_deformation also the neo-Hookean solve and where the two part)."""
+    import json
+    import time
+    from pathlib import Path
+
+    from fem.nonlinear import compare_line_load
+    from reconstruct.io import staged_output, write_json
+
+    t0 = time.perf_counter()
+    depth_list = _parse_floats(depths, "depths")
+    folder = Path(model_dir)
+    info = json.loads((folder / "model.json").read_text()) if (folder / "model.json").is_file() else {}
+    material = material or info.get("material", "m43338")
+    parse_code(material)
+    c = compare_line_load(model_dir, depth_list, material=material, nu=nu, half_width_mm=half_width_mm,
+                          step_mm=step_mm, position_mm=position_mm, slip=slip, half_length_mm=half_length_mm,
+                          large_deformation=large_deformation)
+    plt = _plt()
+    with staged_output(out_dir) as tmp:
+        rows = [[float(d), float(x), float(a), float(b)] for k, d in enumerate(c.depths_mm)
+                for x, a, b in zip(c.distance_mm, c.deflection_linear_mm[k], c.deflection_nonlinear_mm[k])]
+        _write_csv(tmp / "line_load.csv", ["depth_mm", "distance_mm", "linear_mm", "nonlinear_mm"], rows)
+        report = {"model": str(model_dir), "material": material, "large_deformation": large_deformation,
+                  "slip": slip, "half_width_mm": half_width_mm, "step_mm": step_mm,
+                  "depths_mm": c.depths_mm.tolist(), "force_linear_N": c.force_linear_N.tolist(),
+                  "force_nonlinear_N": c.force_nonlinear_N.tolist(), "max_difference": c.max_difference.tolist(),
+                  "min_J": c.min_J.tolist(), "newton_iterations_last_step": [len(h) for h in c.newton],
+                  "nonlinear_seconds": c.seconds.tolist(), "failed": {str(k): v for k, v in c.failed.items()},
+                  "force_unit": "N per mm (2D plane strain)" if c.dim == 2 else "N",
+                  "seconds": round(time.perf_counter() - t0, 2)}
+        write_json(tmp / "line_load.json", report)
+        fig, ax = plt.subplots(1, 2, figsize=(12, 4))
+        for k, d in enumerate(c.depths_mm):
+            line = ax[0].plot(c.distance_mm, c.deflection_linear_mm[k], "-", label=f"linear {d:g} mm")[0]
+            if large_deformation:
+                ax[0].plot(c.distance_mm, c.deflection_nonlinear_mm[k], "--", color=line.get_color(),
+                           label=f"large deformation {d:g} mm")
+        ax[0].set(xlabel="distance from the load, mm", ylabel="deflection, mm (into the finger +)",
+                  title="surface deflection under the line load")
+        ax[1].plot(c.depths_mm, c.force_linear_N, "o-", label="linear")
+        if large_deformation:
+            ax[1].plot(c.depths_mm, c.force_nonlinear_N, "s--", label="large deformation")
+        ax[1].set(xlabel="depth, mm", ylabel="force", title="force vs depth")
+        for a in ax:
+            a.legend(fontsize=7)
+        fig.tight_layout()
+        fig.savefig(tmp / "line_load.png", dpi=100)
+        plt.close(fig)
+    lines = [f"line load on {model_dir} ({material}, patch half width {half_width_mm:g} mm, "
+             f"{'sliding' if slip else 'held'} sideways) in {out_dir} ({report['seconds']} s)"]
+    for k, d in enumerate(c.depths_mm):
+        text = f"  {d:g} mm: force linear {c.force_linear_N[k]:.4g}"
+        if float(d) in c.failed:
+            text += f"; large deformation failed: {c.failed[float(d)]}"
+        elif large_deformation:
+            text += (f", large deformation {c.force_nonlinear_N[k]:.4g} (x{c.force_nonlinear_N[k] / c.force_linear_N[k]:.3f}); "
+                     f"max deflection difference {100 * c.max_difference[k]:.1f} % of the depth; min J {c.min_J[k]:.2f}; "
+                     f"{c.seconds[k]:.1f} s")
+        lines.append(text)
     return "\n".join(lines)

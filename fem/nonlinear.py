@@ -311,7 +311,8 @@ class LineLoadComparison:
     nodes within band_mm of x = x0) and deflection (k, n) [mm, into the body +]; max_difference
     (k,) = max |nonlinear - linear| deflection / depth; min_J (k,) smallest volume ratio reached;
     newton: residual histories of the last load step; seconds (k,) wall time of each nonlinear
-    solve; failed: {depth: message} where the nonlinear solve could not reach the depth."""
+    solve; failed: {depth: message} where the nonlinear solve could not reach the depth; dim:
+    the model's space dimension (2: forces per mm of thickness)."""
     depths_mm: np.ndarray
     distance_mm: np.ndarray
     deflection_linear_mm: np.ndarray
@@ -323,6 +324,7 @@ class LineLoadComparison:
     newton: list
     seconds: np.ndarray
     failed: dict
+    dim: int
 
 
 #: constraints of a model folder without the load (as fem.contact.open_model)
@@ -366,11 +368,16 @@ def line_load_model(model_dir, material=None, nu=None, position_mm=None, half_wi
 
 def compare_line_load(model_dir, depths_mm=(0.05, 0.5, 1.0), material=None, nu=None, half_width_mm=0.0,
                       step_mm: float = 0.1, position_mm=None, slip: bool = False, half_length_mm: float = 1.0,
-                      band_mm: float = 0.25) -> LineLoadComparison:
+                      band_mm: float = 0.25, large_deformation: bool = True) -> LineLoadComparison:
     """Linear vs large-deformation surface deflection and force under a prescribed line load
-    (each depth solved from zero in load steps of about step_mm)."""
+    (each depth solved from zero in load steps of about step_mm; large_deformation=False: the
+    linear solution only, the nonlinear fields NaN)."""
     import time
 
+    depths = np.asarray(depths_mm, float).ravel()
+    if not depths.size or np.any(depths <= 0) or not step_mm > 0 or half_width_mm < 0 or half_length_mm < 0:
+        raise InputError(f"line load: depths ({depths.tolist()}) and step ({step_mm}) must be > 0 mm, "
+                         f"half width ({half_width_mm}) and half length ({half_length_mm}) >= 0 mm")
     model, pos = line_load_model(model_dir, material, nu, position_mm, half_width_mm, half_length_mm)
     nl = NeoHookean(model)
     d = model.dim
@@ -387,19 +394,19 @@ def compare_line_load(model_dir, depths_mm=(0.05, 0.5, 1.0), material=None, nu=N
     held = {k: v for k, v in HELD[d].items() if k in model.regions}
     out = {k: [] for k in ("lin", "non", "fl", "fn", "diff", "J", "newton", "s")}
     failed = {}
-    for depth in depths_mm:
+    for depth in depths:
         push = [None if slip else 0.0] * d
         push[1] = -float(depth)
         pres = {**held, "load": tuple(push)}
         ul = model.system(pres).u0
         out["lin"].append(-ul[ydofs])
         out["fl"].append(-float((model.K @ ul)[load].sum()))
-        t0 = time.perf_counter()
-        try:
-            res = nl.solve(pres, steps=max(1, int(np.ceil(depth / step_mm - 1e-9))))
-        except RuntimeError as exc:
-            failed[float(depth)] = str(exc)
-            res = None
+        t0, res = time.perf_counter(), None
+        if large_deformation:
+            try:
+                res = nl.solve(pres, steps=max(1, int(np.ceil(depth / step_mm - 1e-9))))
+            except RuntimeError as exc:
+                failed[float(depth)] = str(exc)
         out["s"].append(time.perf_counter() - t0)
         if res is None:
             for k, v in (("non", np.full(len(ydofs), np.nan)), ("fn", np.nan), ("diff", np.nan), ("J", np.nan),
@@ -411,6 +418,6 @@ def compare_line_load(model_dir, depths_mm=(0.05, 0.5, 1.0), material=None, nu=N
         out["diff"].append(float(np.abs(out["non"][-1] - out["lin"][-1]).max() / depth))
         out["J"].append(float(res.min_J.min()))
         out["newton"].append(res.history[-1])
-    return LineLoadComparison(np.asarray(depths_mm, float), along[order], np.array(out["lin"]), np.array(out["non"]),
+    return LineLoadComparison(depths, along[order], np.array(out["lin"]), np.array(out["non"]),
                               np.array(out["fl"]), np.array(out["fn"]), np.array(out["diff"]), np.array(out["J"]),
-                              out["newton"], np.array(out["s"]), failed)
+                              out["newton"], np.array(out["s"]), failed, d)

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 import pipeline
-from fem.biomech import (DeflectionExperiment, Profile, code_of, fit_force_scale, fit_free_length,
-                         fit_material, layer_study, parse_code, read_deflection_csv, read_force_csv,
-                         side_profile)
+from fem.biomech import (DeflectionExperiment, Profile, code_of, cylinder_series, fit_force_scale,
+                         fit_free_length, fit_material, layer_study, parse_code, read_deflection_csv,
+                         read_force_csv, side_profile)
 from fem.reference import WATERBED_PER_BEAM, beam_deflection, waterbed_deflection
 from reconstruct.errors import InputError
 
@@ -209,6 +209,29 @@ def test_force_scale(exp):
     assert deep.scale == pytest.approx(2.5, rel=1e-9) and deep.rms_N > 0
 
 
+def test_cylinder_series_follows_the_thesis_trends(exp):
+    """Thesis fig. 4-25 (constant force, 2D): a larger cylinder gives a wider contact, a lower
+    peak pressure and needs less depth; fig. 5-14 (fixed depth): a larger contact. The moduli x10
+    at forces x10 give the same contact (only ratios matter) and pressures x10."""
+    codes = ["C1", "C3", "C5", "C7"]
+    s = cylinder_series(exp, "m43338", codes, forces_N=[0.001, 0.002])
+    assert s.diameters_mm.tolist() == [1.59, 4.76, 9.52, 19.05]
+    np.testing.assert_allclose(s.force_N, [[0.001] * 4, [0.002] * 4], rtol=1e-5)
+    for j in range(2):
+        assert np.all(np.diff(s.contact_area_mm2[j]) > 0), s.contact_area_mm2
+        assert np.all(np.diff(s.max_pressure_MPa[j]) < 0), s.max_pressure_MPa
+        assert np.all(np.diff(s.depth_mm[j]) < 0), s.depth_mm
+    assert np.all(s.contact_area_mm2[1] > s.contact_area_mm2[0])            # more force, wider
+    d = cylinder_series(exp, "m43338", codes, depths_mm=[1.0])
+    np.testing.assert_allclose(d.depth_mm, 1.0, rtol=1e-9)
+    assert np.all(np.diff(d.contact_area_mm2[0]) > 0) and np.all(np.diff(d.force_N[0]) > 0)
+    x10 = cylinder_series(exp, "m54449", codes, forces_N=[0.01, 0.02])
+    np.testing.assert_allclose(x10.contact_area_mm2, s.contact_area_mm2, rtol=1e-6)
+    np.testing.assert_allclose(x10.max_pressure_MPa, 10 * s.max_pressure_MPa, rtol=1e-5)
+    with pytest.raises(InputError, match="unknown cylinder"):
+        cylinder_series(exp, "m43338", ["C9"], forces_N=[0.001])
+
+
 # --------------------------------------------------------------------------- commands
 def test_study_layers_and_fit_material_commands(section, exp, tmp_path):
     import json
@@ -237,12 +260,39 @@ def test_study_layers_and_fit_material_commands(section, exp, tmp_path):
     assert (out / "fit_profiles.png").is_file() and (out / "force_fit.png").is_file()
 
 
+def test_line_load_and_contact_series_commands(section, tmp_path):
+    import json
+
+    out = tmp_path / "ll"
+    assert pipeline.main(["line-load", str(section), "--depth", "0.05,0.4", "--large-deformation", "--step", "0.2",
+                          "--out", str(out), "--quiet"]) == 0
+    rep = json.loads((out / "line_load.json").read_text())
+    assert {p.name for p in out.iterdir()} == {"line_load.csv", "line_load.json", "line_load.png"}
+    assert rep["material"] == "m43338" and not rep["failed"] and rep["slip"] is False
+    ratio = np.array(rep["force_nonlinear_N"]) / np.array(rep["force_linear_N"])
+    assert abs(ratio[0] - 1) < 0.01 and ratio[1] > ratio[0]                  # parts with depth
+    out = tmp_path / "cs"
+    assert pipeline.main(["contact-series", str(section), "--depth", "0.5", "--cylinders", "C2,C6",
+                          "--out", str(out), "--quiet"]) == 0
+    rep = json.loads((out / "cylinder_series.json").read_text())
+    assert rep["codes"] == ["C2", "C6"] and rep["contact_area_mm2"][0][1] > rep["contact_area_mm2"][0][0]
+    assert (out / "cylinder_series.png").is_file() and (out / "cylinder_series.csv").is_file()
+
+
 @pytest.mark.parametrize("args, message", [
     (["study-layers", "{model}", "--base", "m4333"], "has 4 digits"),
     (["fit-material", "{model}", "--deflection", "{empty}"], "no data rows"),
     (["fit-material", "{model}", "--deflection", "{unsorted}"], "not increasing"),
     (["fit-material", "{model}"], "needs --deflection"),
     (["fit-material", "{model}", "--force", "{empty}"], "no data rows"),
+    (["line-load", "{model}", "--depth", "0,1"], "give positive values"),
+    (["line-load", "{model}", "--depth", "1", "--step", "0"], "must be > 0 mm"),
+    (["line-load", "{model}", "--material", "m433380"], "has 6 digits"),
+    (["line-load", "{model}", "--depth", "a:b"], "bad value list"),
+    (["contact-series", "{model}"], "needs --force or --depth"),
+    (["contact-series", "{model}", "--force", "0.001", "--depth", "1"], "needs --force or --depth"),
+    (["contact-series", "{model}", "--depth", "1", "--cylinders", "C1,X2"], "unknown cylinder"),
+    (["contact-series", "{model}", "--force", "0.001", "--material", "m43"], "has 2 digits"),
 ])
 def test_bad_input_one_line_exit_2(section, tmp_path, capsys, args, message):
     empty = _write(tmp_path, "", "empty.csv")
