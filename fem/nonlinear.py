@@ -88,13 +88,16 @@ class NonlinearResult:
     """Converged load steps: load factors t (k,), displacements u (k, ndof) [mm], reaction
     nodal forces (k, ndof) [N; N/mm in 2D] (internal force on every DOF; on constrained DOFs the
     reaction), smallest J at any quadrature point per step min_J (k,), Newton residual norm
-    histories per step, step cuts taken."""
+    histories per step, step cuts taken; stopped: why the solve ended before load factor 1
+    (None when it got there)."""
     t: np.ndarray
     u: np.ndarray
     reaction: np.ndarray
     min_J: np.ndarray
+    seconds: np.ndarray
     history: list = field(default_factory=list)
     cuts: int = 0
+    stopped: str | None = None
 
 
 class NeoHookean:
@@ -206,22 +209,30 @@ class NeoHookean:
 
     # ------------------------------------------------------------------ Newton with load stepping
     def solve(self, prescribed, steps: int = 4, tol: float = 1e-10, max_iter: int = 25,
-              max_cuts: int = 8, loads=None) -> NonlinearResult:
+              max_cuts: int = 8, loads=None, stops=(), partial: bool = False) -> NonlinearResult:
         """Prescribed displacements (as `Model.system`: region -> value) applied in `steps` equal
         load steps, adapted (see the module notes; at most max_cuts halvings below 1 / steps).
         tol: Newton stops when the free residual norm is below tol times the reaction norm.
-        loads: optional (ndof,) fixed nodal forces [N] scaled with the load factor too."""
+        loads: optional (ndof,) fixed nodal forces [N] scaled with the load factor too.
+        stops: load factors in (0, 1) that are landed on exactly (extra converged states).
+        A solve that cannot go on raises RuntimeError, or with partial=True returns the states
+        reached with the reason in `stopped`."""
+        import time
+
+        start = time.perf_counter()
         system = self.model.system(prescribed)
         fixed, values = system.fixed, system.values
         rigid = np.unique(self.udofs[self.rigid]) if self.rigid.any() else np.zeros(0, int)
         free = np.setdiff1d(np.arange(self.ndof), np.union1d(fixed, rigid))
         ext = np.zeros(self.ndof) if loads is None else np.asarray(loads, float)
+        targets = np.union1d([t for t in np.asarray(stops, float).ravel() if 1e-12 < t < 1 - 1e-12], [1.0])
         u = np.zeros(self.ndof)
-        out_t, out_u, out_f, out_J, hist = [0.0], [u.copy()], [np.zeros(self.ndof)], [1.0], [[]]
-        t, dt0, cuts, easy = 0.0, 1.0 / steps, 0, 0
+        out_t, out_u, out_f, out_J, out_s, hist = [0.0], [u.copy()], [np.zeros(self.ndof)], [1.0], [0.0], [[]]
+        t, dt0, cuts, easy, stopped = 0.0, 1.0 / steps, 0, 0, None
         dt = dt0
         while t < 1.0 - 1e-12:
-            t_new = min(1.0, t + dt)
+            target = targets[np.searchsorted(targets, t + 1e-12)]
+            t_new = target if t + dt >= target - 1e-12 else t + dt
             try:
                 trial, h = self._newton(u, fixed, (t_new - t) * values, free, t_new * ext, tol, max_iter)
             except (FloatingPointError, RuntimeError) as exc:
@@ -231,10 +242,12 @@ class NeoHookean:
                     J = self.jacobian(u)
                     e = int(np.argmin(J.min(axis=1)))
                     where = self.model.mesh.p[:, self.model.mesh.t[:, e]].mean(axis=1)
-                    raise RuntimeError(
-                        f"large-deformation solve stopped at load factor {t:.4g} (next step {t_new:.4g}: {exc}); "
-                        f"smallest J there {J.min():.3g} in layer {self.model.layer[e]} at "
-                        f"{np.round(where, 3).tolist()} mm") from None
+                    stopped = (f"large-deformation solve stopped at load factor {t:.4g} (next step {t_new:.4g}: "
+                               f"{exc}); smallest J there {J.min():.3g} in layer {self.model.layer[e]} at "
+                               f"{np.round(where, 3).tolist()} mm")
+                    if not partial:
+                        raise RuntimeError(stopped) from None
+                    break
                 easy = 0
                 continue
             t, u = t_new, trial
@@ -245,8 +258,10 @@ class NeoHookean:
             out_u.append(u.copy())
             out_f.append(self.internal_force(u))
             out_J.append(float(self.jacobian(u).min()))
+            out_s.append(time.perf_counter() - start)
             hist.append(h)
-        return NonlinearResult(np.array(out_t), np.array(out_u), np.array(out_f), np.array(out_J), hist, cuts)
+        return NonlinearResult(np.array(out_t), np.array(out_u), np.array(out_f), np.array(out_J), np.array(out_s),
+                               hist, cuts, stopped)
 
     def _line_search(self, u, du, free, ext, norm, tries: int = 6):
         """The full Newton step if it lowers the residual (always, near the solution: quadratic
@@ -310,8 +325,8 @@ class LineLoadComparison:
     signed distance_mm (n,) from the load line (2D: x - x0; 3D: z - z0 along the finger axis,
     nodes within band_mm of x = x0) and deflection (k, n) [mm, into the body +]; max_difference
     (k,) = max |nonlinear - linear| deflection / depth; min_J (k,) smallest volume ratio reached;
-    newton: residual histories of the last load step; seconds (k,) wall time of each nonlinear
-    solve; failed: {depth: message} where the nonlinear solve could not reach the depth; dim:
+    newton: residual histories of the load step ending at each depth; seconds (k,) wall time of the
+    nonlinear solve up to each depth; failed: {depth: message} where the nonlinear solve could not reach the depth; dim:
     the model's space dimension (2: forces per mm of thickness)."""
     depths_mm: np.ndarray
     distance_mm: np.ndarray
@@ -369,17 +384,15 @@ def line_load_model(model_dir, material=None, nu=None, position_mm=None, half_wi
 def compare_line_load(model_dir, depths_mm=(0.05, 0.5, 1.0), material=None, nu=None, half_width_mm=0.0,
                       step_mm: float = 0.1, position_mm=None, slip: bool = False, half_length_mm: float = 1.0,
                       band_mm: float = 0.25, large_deformation: bool = True) -> LineLoadComparison:
-    """Linear vs large-deformation surface deflection and force under a prescribed line load
-    (each depth solved from zero in load steps of about step_mm; large_deformation=False: the
-    linear solution only, the nonlinear fields NaN)."""
-    import time
-
+    """Linear vs large-deformation surface deflection and force under a prescribed line load. The
+    nonlinear solve goes once to the deepest depth in load steps of about step_mm, landing on every
+    depth (hyperelastic: the path does not matter); large_deformation=False: the linear solution
+    only, the nonlinear fields NaN."""
     depths = np.asarray(depths_mm, float).ravel()
     if not depths.size or np.any(depths <= 0) or not step_mm > 0 or half_width_mm < 0 or half_length_mm < 0:
         raise InputError(f"line load: depths ({depths.tolist()}) and step ({step_mm}) must be > 0 mm, "
                          f"half width ({half_width_mm}) and half length ({half_length_mm}) >= 0 mm")
     model, pos = line_load_model(model_dir, material, nu, position_mm, half_width_mm, half_length_mm)
-    nl = NeoHookean(model)
     d = model.dim
     sn = model.surface_nodes("surface" if d == 2 else "volar")
     if d == 2:
@@ -391,33 +404,26 @@ def compare_line_load(model_dir, depths_mm=(0.05, 0.5, 1.0), material=None, nu=N
     order = np.flatnonzero(on)[np.argsort(along[on])]
     ydofs = sn.dofs[order, 1]
     load = model.node_dofs(model.region_nodes("load"))[:, 1]
-    held = {k: v for k, v in HELD[d].items() if k in model.regions}
-    out = {k: [] for k in ("lin", "non", "fl", "fn", "diff", "J", "newton", "s")}
-    failed = {}
-    for depth in depths:
-        push = [None if slip else 0.0] * d
-        push[1] = -float(depth)
-        pres = {**held, "load": tuple(push)}
-        ul = model.system(pres).u0
-        out["lin"].append(-ul[ydofs])
-        out["fl"].append(-float((model.K @ ul)[load].sum()))
-        t0, res = time.perf_counter(), None
-        if large_deformation:
-            try:
-                res = nl.solve(pres, steps=max(1, int(np.ceil(depth / step_mm - 1e-9))))
-            except RuntimeError as exc:
-                failed[float(depth)] = str(exc)
-        out["s"].append(time.perf_counter() - t0)
-        if res is None:
-            for k, v in (("non", np.full(len(ydofs), np.nan)), ("fn", np.nan), ("diff", np.nan), ("J", np.nan),
-                         ("newton", [])):
-                out[k].append(v)
-            continue
-        out["non"].append(-res.u[-1][ydofs])
-        out["fn"].append(-float(res.reaction[-1][load].sum()))
-        out["diff"].append(float(np.abs(out["non"][-1] - out["lin"][-1]).max() / depth))
-        out["J"].append(float(res.min_J.min()))
-        out["newton"].append(res.history[-1])
-    return LineLoadComparison(depths, along[order], np.array(out["lin"]), np.array(out["non"]),
-                              np.array(out["fl"]), np.array(out["fn"]), np.array(out["diff"]), np.array(out["J"]),
-                              out["newton"], np.array(out["s"]), failed, d)
+    deepest = float(depths.max())
+    push = [None if slip else 0.0] * d
+    push[1] = -deepest
+    pres = {**{k: v for k, v in HELD[d].items() if k in model.regions}, "load": tuple(push)}
+    unit = model.system(pres).u0 / deepest                     # linear: proportional to the depth
+    lin = depths[:, None] * -unit[ydofs]
+    f_lin = depths * -float((model.K @ unit)[load].sum())
+    n = len(depths)
+    non, f_non, J, secs = np.full((n, len(ydofs)), np.nan), np.full(n, np.nan), np.full(n, np.nan), np.zeros(n)
+    newton, failed = [[] for _ in range(n)], {}
+    if large_deformation:
+        res = NeoHookean(model).solve(pres, steps=max(1, int(np.ceil(deepest / step_mm - 1e-9))),
+                                      stops=depths / deepest, partial=True)
+        for k, depth in enumerate(depths):
+            hit = np.flatnonzero(np.abs(res.t * deepest - depth) < 1e-9 * deepest)
+            if not hit.size:
+                failed[float(depth)] = res.stopped
+                continue
+            i = hit[0]
+            non[k], f_non[k] = -res.u[i][ydofs], -float(res.reaction[i][load].sum())
+            J[k], secs[k], newton[k] = res.min_J[:i + 1].min(), res.seconds[i], res.history[i]
+    diff = np.abs(non - lin).max(axis=1) / depths
+    return LineLoadComparison(depths, along[order], lin, non, f_lin, f_non, diff, J, newton, secs, failed, d)
