@@ -98,7 +98,7 @@ def test_receptor_grid_measures_match_solver_sampling():
     sn = model.surface_nodes("top")
     grid = receptor_grid(sn.x, sn.normal, depths_mm=(0.5, 1.0), spacing_mm=0.5)
     fine = grid.sites_mm[:, 0] < 1.3                      # uniform 0.05 mm nodes there
-    np.testing.assert_allclose(np.sort(grid.sites_mm[fine, 0]), [0.25, 0.75, 1.25])
+    np.testing.assert_allclose(np.sort(grid.sites_mm[fine, 0]), [0.0, 0.5, 1.0])     # cells centred on x = 0
     np.testing.assert_allclose(grid.points_mm[:, 1], -grid.depth_mm, atol=1e-12)
     sampler = ReceptorSampler(model, grid)
     cm = ContactModel.from_fe(model, system, "top", observe=sampler.operator)
