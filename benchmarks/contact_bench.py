@@ -68,6 +68,7 @@ def _run(name, model_dir, indentor, offsets, loads, target_s, checks=5, middle_l
     cases = [(off, load) for off in offsets for load in loads]
     t = time.perf_counter()
     results = [cm.sweep(indentor, off[None], **load)[0] for off, load in cases]
+    assert all(r.observed is not None for r in results)     # receptor responses, computed in blocks
     run_s = time.perf_counter() - t
     picks = np.unique(np.linspace(0, len(cases) - 1, checks).astype(int))
     errs = np.array([_check(model, system, region, sampler, indentor.shifted(cases[i][0]), results[i], cases[i][1])

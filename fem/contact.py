@@ -47,7 +47,6 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
-from threadpoolctl import threadpool_limits
 
 from reconstruct.errors import InputError
 
@@ -134,9 +133,13 @@ class Compliance:
         return self._store[self.m:, self._slot[idx]]
 
     def observe(self, force_N) -> np.ndarray:
-        """(r,) observed response to nodal contact forces (m,): cached columns times the forces."""
-        act = np.flatnonzero(force_N)
-        return self.observed(act) @ force_N[act] if act.size else np.zeros(self.r)
+        """(r,) or (r, k) observed response to nodal contact forces (m,) or (m, k): cached
+        columns times the forces."""
+        force_N = np.asarray(force_N, float)
+        act = np.flatnonzero(np.any(force_N.reshape(self.m, -1) != 0, axis=1))
+        if not act.size:
+            return np.zeros((self.r,) + force_N.shape[1:])
+        return self.observed(act) @ force_N[act]
 
 
 class MatrixCompliance(Compliance):
@@ -194,8 +197,8 @@ class CondensedCompliance(FactorCompliance):
     their Schur complement, no solves); observations take one solve per indentation instead of
     cached columns. Same arguments as FactorCompliance, with the LinearSystem for `solve`."""
 
-    def __init__(self, system, n_dofs: int, dofs, direction, observe=None):
-        super().__init__(system.solve, n_dofs, dofs, direction, observe)
+    def __init__(self, system, n_dofs: int, dofs, direction, observe=None, chunk: int = 64):
+        super().__init__(system.solve, n_dofs, dofs, direction, observe, chunk)
         axis = condensed_axis(direction, np.asarray(dofs).shape[1])
         self._C = system.compliance(np.asarray(dofs)[:, axis])     # sign^2 = 1: C is the same for -a
 
@@ -206,8 +209,13 @@ class CondensedCompliance(FactorCompliance):
         raise NotImplementedError("a condensed compliance observes whole force vectors: use observe()")
 
     def observe(self, force_N) -> np.ndarray:
-        """(r,) observed response to nodal contact forces (m,): one solve."""
-        return self.O[self.m:] @ self.displacement(force_N) if self.r else np.zeros(0)
+        """(r,) or (r, k) observed response to nodal contact forces (m,) or (m, k): one solve per
+        force vector, `chunk` of them per call."""
+        F = np.asarray(force_N, float).reshape(self.m, -1)
+        out = np.zeros((self.r, F.shape[1]))
+        for s in range(0, F.shape[1] if self.r else 0, self.chunk):
+            out[:, s:s + self.chunk] = self.O[self.m:] @ self.solve(np.asfortranarray(self.B @ F[:, s:s + self.chunk]))
+        return out.reshape((self.r,) + np.shape(force_N)[1:])
 
 
 def condensed_axis(direction, dim) -> int | None:
@@ -218,6 +226,22 @@ def condensed_axis(direction, dim) -> int | None:
 
 
 # --------------------------------------------------------------------------- LCP
+_CONTROLLER = []
+
+
+def _blas_threads(limit):
+    """Context limiting BLAS threads (None: no limit); the library scan is done once (~6 ms)."""
+    from contextlib import nullcontext
+
+    from threadpoolctl import ThreadpoolController
+
+    if limit is None:
+        return nullcontext()
+    if not _CONTROLLER:
+        _CONTROLLER.append(ThreadpoolController())
+    return _CONTROLLER[0].limit(limits=limit, user_api="blas")
+
+
 @dataclass
 class LCPSolution:
     force: np.ndarray        # (n,) f >= 0
@@ -244,7 +268,7 @@ def solve_lcp(columns, q, start=None, tol_mm: float = GAP_TOL_MM, max_iter: int 
         factor = None
         if idx.size:
             cols = columns(idx)
-            with threadpool_limits(1 if idx.size < SERIAL_BLAS_BELOW else None, user_api="blas"):
+            with _blas_threads(1 if idx.size < SERIAL_BLAS_BELOW else None):
                 factor = sla.cho_factor(cols[idx], lower=True)
                 f[idx] = sla.cho_solve(factor, -q[idx])
             g = q + cols @ f[idx]
@@ -280,8 +304,18 @@ class ContactResult:
     part: np.ndarray                # (m,) index of the indentor part facing each node
     pressure_MPa: np.ndarray        # (m,) contact pressure (facet-averaged nodal force / area)
     area_mm2: np.ndarray            # (m,) tributary areas
-    observed: np.ndarray | None     # (r,) observation operator applied to the displacement (once final)
     kkt: dict = field(default_factory=dict)
+    _observed: np.ndarray | None = field(default=None, repr=False)
+    _source: "ContactModel | None" = field(default=None, repr=False)
+
+    @property
+    def observed(self) -> np.ndarray:
+        """(r,) observation operator applied to the displacement (e.g. receptor strains). Computed
+        on first use, together with every other finished indentation of the same ContactModel
+        still waiting for it (one block solve per 64 on a condensed compliance)."""
+        if self._observed is None and self._source is not None:
+            self._source.observe_pending()
+        return self._observed
 
     @property
     def active(self) -> np.ndarray:
@@ -333,6 +367,7 @@ class ContactModel:
         self._compliance = {}
         self.tol_mm = tol_mm
         self._warm = None
+        self._pending = []           # (result, compliance) awaiting observations
         self._force_depth = 0.5      # first trial depth (mm) of force control; then the last one
 
     @classmethod
@@ -353,7 +388,7 @@ class ContactModel:
         def compliance_for(a):
             axis = condensed_axis(a, model.dim)
             if axis is not None and np.isin(sn.dofs[:, axis], np.r_[system.condensed, system.fixed]).all():
-                return CondensedCompliance(system, model.ndof, sn.dofs, a, observe=observe)
+                return CondensedCompliance(system, model.ndof, sn.dofs, a, observe=observe, chunk=chunk)
             return FactorCompliance(system.solve, model.ndof, sn.dofs, a, observe=observe, chunk=chunk)
         return cls(sn.x, sn.area, compliance_for, facets=(facets, facet_shares(facets, size, model.dim)), **kw)
 
@@ -402,7 +437,7 @@ class ContactModel:
                 pressure = np.where(f > 0, f / self.areas_mm2, 0.0)
         t0 = self.first_touch_mm(indentor)
         res = ContactResult(indentor.name, travel - t0, travel.copy(), f, g, w, part, pressure,
-                            self.areas_mm2, None, _kkt(f[sub], g[sub], self.tol_mm))
+                            self.areas_mm2, _kkt(f[sub], g[sub], self.tol_mm))
         res.kkt["iterations"] = lcp.iterations
         return res, lcp, sub
 
@@ -438,10 +473,20 @@ class ContactModel:
         return out
 
     def _finish(self, res, indentor) -> ContactResult:
-        """Warm start for the next indentation; observations of the final contact forces."""
+        """Warm start for the next indentation; the result's observations are left pending."""
         self._warm = res.force_N > 0
-        res.observed = self.compliance(indentor.approach).observe(res.force_N)
+        res._source = self
+        self._pending.append((res, self.compliance(indentor.approach)))
         return res
+
+    def observe_pending(self) -> None:
+        """Observations of every finished indentation not observed yet, in blocks per compliance."""
+        pending, self._pending = self._pending, []
+        for comp in {id(c): c for _, c in pending}.values():
+            group = [r for r, c in pending if c is comp]
+            obs = comp.observe(np.stack([r.force_N for r in group], axis=1))
+            for j, r in enumerate(group):
+                r._observed, r._source = obs[:, j], None
 
     def _force(self, indentor, target, equal_force, max_depth_mm, t0):
         """Newton on the depth(s) with the exact Jacobian of the current active set, safeguarded:
