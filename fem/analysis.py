@@ -105,10 +105,14 @@ class IndentRun:
             raise InputError(f"'{folder}' holds no <name>.csv + <name>_receptors.csv pairs from "
                              f"`pipeline.py indent`")
         record = self.folder / "run.json"
-        self.run = json.loads(record.read_text()) if record.is_file() else None
+        try:
+            self.run = json.loads(record.read_text()) if record.is_file() else None
+            self._experiments = {e["name"]: e for e in self.run["experiments"]} if self.run else {}
+        except (ValueError, KeyError, TypeError):
+            raise InputError(f"'{record}' is not a run.json written by `pipeline.py indent`") from None
         if diameter_mm is None:
             if self.run is not None:
-                diameter_mm = self.run["model"].get("diameter_mm")
+                diameter_mm = self.run.get("model", {}).get("diameter_mm")
             elif (self.folder.parent / "model.json").is_file():
                 diameter_mm = json.loads((self.folder.parent / "model.json").read_text()).get(
                     "params", {}).get("diameter_mm")
@@ -116,11 +120,10 @@ class IndentRun:
         self._cache = {}
 
     def sweep_axis(self, stimulus) -> str | None:
-        """'x' or 'z' for a sweep, None for fixed positions (from run.json; None without it)."""
-        if self.run is None:
-            return None
-        exp = next((e for e in self.run["experiments"] if e["name"] == stimulus), None)
-        return None if exp is None or exp["sweep"] is None else exp["sweep"]["axis"]
+        """'x' or 'z' for a sweep, None for fixed positions or a stimulus run.json does not list
+        (a folder keeps the files of earlier runs; run.json describes the last one)."""
+        sweep = self._experiments.get(stimulus, {}).get("sweep")
+        return None if sweep is None else sweep["axis"]
 
     def __repr__(self):
         return f"IndentRun('{self.folder}', stimuli={self.stimuli}, diameter_mm={self.diameter_mm})"
@@ -134,8 +137,10 @@ class IndentRun:
         steps = _read_csv(self.folder / f"{stimulus}.csv")
         offx = np.array([float(r["offset_x_mm"]) for r in steps])
         offz = np.array([float(r["offset_z_mm"]) for r in steps])
-        axis = self.sweep_axis(stimulus)
-        along_z = axis == "z" if self.run is not None else np.ptp(offz) > np.ptp(offx)
+        if stimulus in self._experiments:
+            along_z = self.sweep_axis(stimulus) == "z"
+        else:                       # not recorded: the axis with the larger offset range
+            along_z = np.ptp(offz) > np.ptp(offx)
         position = offz if along_z else offx
         path = self.folder / f"{stimulus}_receptors.csv"
         with open(path) as fh:

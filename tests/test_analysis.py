@@ -236,6 +236,9 @@ def test_run_json_gives_diameter_and_sweep_axis_outside_the_model_folder(models,
     shutil.copytree(models[16] / "sweeps", folder)
     run = IndentRun(folder)
     assert run.diameter_mm == 16.0 and run.sweep_axis("bar") == "x"
+    (folder / "run.json").write_text("{")
+    with pytest.raises(InputError, match="not a run.json"):
+        IndentRun(folder)
     (folder / "run.json").unlink()
     assert IndentRun(folder).diameter_mm is None
     with pytest.raises(InputError, match="--diameters"):
