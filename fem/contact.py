@@ -755,7 +755,8 @@ def _run_record(model_dir, model, info, rc, line, grid, measures, experiments) -
                       "diameter_mm": info.get("params", {}).get("diameter_mm"), "dofs": int(model.ndof)},
             "material": mat.code, "E_MPa": {str(k): v for k, v in sorted(mat.E_MPa.items())},
             "nu": nus.pop() if len(nus) == 1 else {str(k): v for k, v in sorted(mat.nu.items())},
-            "receptors": {"depths_mm": np.unique(grid.depth_mm).tolist(), "spacing_mm": float(rc.get("spacing_mm", 1.0)),
+            "receptors": {"depths_mm": np.unique(grid.depth_mm).tolist(),
+                          "spacing_mm": float(rc.get("spacing_mm", 1.0)),
                           "line": None if line is None else ["xyz"[line[0]], line[1]], "measures": list(measures),
                           "sites": len(grid.sites_mm), "points": len(grid.points_mm),
                           "site_column": "site: id of the surface site (row of sites_mm), the same in every "

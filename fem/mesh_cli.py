@@ -66,7 +66,8 @@ def run_mesh_command(args) -> str:
                              fine_depth_mm=args.fine_depth))
     done = run_mesh(args.out, model, sizing, force=args.force, progress=not args.quiet)
     if done is None:
-        return f"{args.out}: mesh.vtu and model.json are current for these inputs (use --force to redo)" + size_note(model)
+        return (f"{args.out}: mesh.vtu and model.json are current for these inputs (use --force to redo)"
+                + size_note(model))
     return summary(done[1], done[2], args.out) + size_note(model)
 
 
