@@ -909,6 +909,7 @@ def run_contact_series(model_dir, out_dir, material=None, cylinders=None, forces
     material = material or exp.info.get("material", "m43338")
     s = cylinder_series(exp, material, codes, **({"forces_N": loads} if forces is not None else {"depths_mm": loads}))
     unit = "N per mm (2D plane strain)" if exp.dim == 2 else "N"
+    force_unit = "N/mm" if exp.dim == 2 else "N"
     area = "contact width, mm" if exp.dim == 2 else "contact area, mm^2"
     plt = _plt()
     with staged_output(out_dir) as tmp:
@@ -922,13 +923,13 @@ def run_contact_series(model_dir, out_dir, material=None, cylinders=None, forces
                                                   **s.report(), "seconds": round(time.perf_counter() - t0, 2)})
         fig, ax = plt.subplots(1, 3, figsize=(14, 4))
         for j, v in enumerate(s.loads):
-            lab = f"{v:g} " + ("N" if s.load_kind == "force" else "mm")
+            lab = f"{v:g} " + (force_unit if s.load_kind == "force" else "mm")
             ax[0].plot(s.diameters_mm, s.contact_area_mm2[j], "o-", label=lab)
             ax[1].plot(s.diameters_mm, s.max_pressure_MPa[j], "o-", label=lab)
             ax[2].plot(s.diameters_mm, s.depth_mm[j] if s.load_kind == "force" else s.force_N[j], "o-", label=lab)
         ax[0].set(xlabel="cylinder diameter, mm", ylabel=area, title=f"contact vs diameter at constant {s.load_kind}")
         ax[1].set(xlabel="cylinder diameter, mm", ylabel="max contact pressure, MPa", title="peak pressure")
-        ax[2].set(xlabel="cylinder diameter, mm", ylabel="depth, mm" if s.load_kind == "force" else f"force, {unit}",
+        ax[2].set(xlabel="cylinder diameter, mm", ylabel="depth, mm" if s.load_kind == "force" else f"force, {force_unit}",
                   title="depth needed" if s.load_kind == "force" else "force needed")
         for a in ax:
             a.legend(fontsize=7)
@@ -938,7 +939,7 @@ def run_contact_series(model_dir, out_dir, material=None, cylinders=None, forces
     lines = [f"cylinder series {', '.join(s.codes)} ({material}, constant {s.load_kind}) in {out_dir} "
              f"({time.perf_counter() - t0:.1f} s)"]
     for j, v in enumerate(s.loads):
-        lines.append(f"  {v:g} {'N' if s.load_kind == 'force' else 'mm'}: {area} "
+        lines.append(f"  {v:g} {force_unit if s.load_kind == 'force' else 'mm'}: {area} "
                      + " ".join(f"{a:.3g}" for a in s.contact_area_mm2[j]) + "; max pressure MPa "
                      + " ".join(f"{p:.3g}" for p in s.max_pressure_MPa[j]))
     return "\n".join(lines)
@@ -984,12 +985,12 @@ def run_line_load(model_dir, out_dir, depths="0.05,0.5,1,2", material=None, nu=N
             if large_deformation:
                 ax[0].plot(c.distance_mm, c.deflection_nonlinear_mm[k], "--", color=line.get_color(),
                            label=f"large deformation {d:g} mm")
-        ax[0].set(xlabel="distance from the load, mm", ylabel="deflection, mm (into the finger +)",
+        ax[0].set(xlabel="undeformed distance from the load, mm", ylabel="deflection, mm (into the finger +)",
                   title="surface deflection under the line load")
         ax[1].plot(c.depths_mm, c.force_linear_N, "o-", label="linear")
         if large_deformation:
             ax[1].plot(c.depths_mm, c.force_nonlinear_N, "s--", label="large deformation")
-        ax[1].set(xlabel="depth, mm", ylabel="force", title="force vs depth")
+        ax[1].set(xlabel="depth, mm", ylabel="force, " + ("N/mm" if c.dim == 2 else "N"), title="force vs depth")
         for a in ax:
             a.legend(fontsize=7)
         fig.tight_layout()

@@ -109,7 +109,6 @@ class NeoHookean:
         from skfem import Basis, ElementTetP2, ElementTriP2
 
         self.model, self.dim, self.chunk = model, model.dim, int(chunk)
-        self.rigid = np.isin(model.layer, list(model.material.rigid))
         scalar = Basis(model.mesh, ElementTetP2() if self.dim == 3 else ElementTriP2(), intorder=2)
         self.grad = np.array([scalar.basis[a][0].grad for a in range(scalar.Nbfun)]).transpose(2, 3, 0, 1)  # (M, nq, nb, d)
         self.dx = scalar.dx                                                                   # (M, nq)
@@ -222,8 +221,7 @@ class NeoHookean:
         start = time.perf_counter()
         system = self.model.system(prescribed)
         fixed, values = system.fixed, system.values
-        rigid = np.unique(self.udofs[self.rigid]) if self.rigid.any() else np.zeros(0, int)
-        free = np.setdiff1d(np.arange(self.ndof), np.union1d(fixed, rigid))
+        free = np.setdiff1d(np.arange(self.ndof), fixed)          # fixed holds rigid layers' nodes too
         ext = np.zeros(self.ndof) if loads is None else np.asarray(loads, float)
         targets = np.union1d([t for t in np.asarray(stops, float).ravel() if 1e-12 < t < 1 - 1e-12], [1.0])
         u = np.zeros(self.ndof)
@@ -342,8 +340,9 @@ class LineLoadComparison:
     dim: int
 
 
-#: constraints of a model folder without the load (as fem.contact.open_model)
-HELD = {2: {"fixed": 0.0}, 3: {"nail": 0.0, "support": (None, 0.0, None)}}
+#: constraints of a model folder without the load: a copy of fem.contact.open_model's (which does
+#: not expose them); regions a mesh lacks are skipped
+HELD = {2: {"fixed": 0.0}, 3: {"nail": 0.0, "support": (None, 0.0, None), "proximal": 0.0}}
 
 
 def line_load_model(model_dir, material=None, nu=None, position_mm=None, half_width_mm: float = 0.0,
