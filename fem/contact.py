@@ -192,15 +192,15 @@ class FactorCompliance(Compliance):
 
 
 class CondensedCompliance(FactorCompliance):
-    """The whole compliance at once from a system factorised with `condense=` on the candidates'
-    DOFs along an approach that is a coordinate axis (`LinearSystem.compliance`: the inverse of
-    their Schur complement, no solves); observations take one solve per indentation instead of
-    cached columns. Same arguments as FactorCompliance, with the LinearSystem for `solve`."""
+    """The whole compliance at once from a system factorised with `condense=(nodes, approach)` on
+    the candidates (`LinearSystem.compliance`: the inverse of their Schur complement, no solves);
+    observations take one solve per indentation (in blocks, `ContactModel.observe_pending`)
+    instead of cached columns. Arguments as FactorCompliance, plus the LinearSystem and the
+    candidates' P2 node ids (m,)."""
 
-    def __init__(self, system, n_dofs: int, dofs, direction, observe=None, chunk: int = 64):
-        super().__init__(system.solve, n_dofs, dofs, direction, observe, chunk)
-        axis = condensed_axis(direction, np.asarray(dofs).shape[1])
-        self._C = system.compliance(np.asarray(dofs)[:, axis])     # sign^2 = 1: C is the same for -a
+    def __init__(self, system, nodes, dofs, direction, observe=None, chunk: int = 64):
+        super().__init__(system.solve, system.model.ndof, dofs, direction, observe, chunk)
+        self._C = system.compliance(nodes, direction)             # the same for -direction
 
     def columns(self, idx) -> np.ndarray:
         return self._C[:, np.asarray(idx, int)]
@@ -216,13 +216,6 @@ class CondensedCompliance(FactorCompliance):
         for s in range(0, F.shape[1] if self.r else 0, self.chunk):
             out[:, s:s + self.chunk] = self.O[self.m:] @ self.solve(np.asfortranarray(self.B @ F[:, s:s + self.chunk]))
         return out.reshape((self.r,) + np.shape(force_N)[1:])
-
-
-def condensed_axis(direction, dim) -> int | None:
-    """Coordinate axis the approach direction (3,) lies along (within 1e-12), else None."""
-    a = np.abs(np.asarray(direction, float))
-    k = int(np.argmax(a))
-    return k if k < dim and a[k] > 1 - 1e-12 else None
 
 
 # --------------------------------------------------------------------------- LCP
@@ -386,10 +379,10 @@ class ContactModel:
         else:
             size = np.linalg.norm(x[:, 1] - x[:, 0], axis=0)
         def compliance_for(a):
-            axis = condensed_axis(a, model.dim)
-            if axis is not None and np.isin(sn.dofs[:, axis], np.r_[system.condensed, system.fixed]).all():
-                return CondensedCompliance(system, model.ndof, sn.dofs, a, observe=observe, chunk=chunk)
-            return FactorCompliance(system.solve, model.ndof, sn.dofs, a, observe=observe, chunk=chunk)
+            try:
+                return CondensedCompliance(system, sn.nodes, sn.dofs, a, observe=observe, chunk=chunk)
+            except ValueError:          # not condensed along a (or not these nodes): lazy columns
+                return FactorCompliance(system.solve, model.ndof, sn.dofs, a, observe=observe, chunk=chunk)
         return cls(sn.x, sn.area, compliance_for, facets=(facets, facet_shares(facets, size, model.dim)), **kw)
 
     @classmethod
@@ -620,8 +613,9 @@ def open_model(model_dir, material=None, nu=None):
     else:
         prescribed, region = {"fixed": 0.0}, "surface"
     prescribed = {k: v for k, v in prescribed.items() if k in model.regions}
-    sn = model.surface_nodes(region)                # vertical approach: condense the candidates' y DOFs
-    condense = sn.dofs[:, 1] if len(sn.nodes) <= CONDENSE_MAX_NODES else None
+    sn = model.surface_nodes(region)                # condense the candidates along the approach
+    up = info.get("regions", {}).get("support", {}).get("vertical_up", [0.0, 1.0, 0.0])
+    condense = (sn.nodes, -np.asarray(up, float)) if len(sn.nodes) <= CONDENSE_MAX_NODES else None
     return model, model.system(prescribed, condense=condense), region, info
 
 

@@ -63,22 +63,30 @@ def test_condensed_matches_full_resolve_and_receptor_strains():
         assert res.active.sum() > 5 and res.kkt["ok"]
 
 
-@pytest.mark.parametrize("dim", [2, 3])
-def test_condensed_compliance_equals_lazy_columns(dim):
-    """A system factorised with the candidates' approach DOFs condensed gives the same indentation
-    (forces, deflections, receptor strains) as lazily solved columns, with no column solves; an
-    inclined approach on it falls back to lazy columns."""
+@pytest.mark.parametrize("dim, incline", [(2, 0.0), (3, 0.0), (3, 30.0)])
+def test_condensed_compliance_equals_lazy_columns(dim, incline):
+    """A system factorised with the candidates condensed along the approach (rotated DOFs for the
+    30 deg inclined approach) gives the same indentation (forces, deflections, receptor strains)
+    as lazily solved columns, with no column solves; another approach falls back to lazy columns."""
     if dim == 2:
         model, _ = half_plane(0.48, fine_mm=0.05, size_mm=20.0)
         prescribed, ind = {"bottom": 0.0, "sym": (0.0, None)}, make_indentor("C2", orientation="parallel")
-    else:
+    elif incline == 0:
         model, _ = quarter_block(0.48, 0.25, 4.0)
-        prescribed, ind = {"bottom": 0.0, "symx": (0.0, None, None), "symz": (None, None, 0.0)}, make_indentor("sphere:5")
+        prescribed = {"bottom": 0.0, "symx": (0.0, None, None), "symz": (None, None, 0.0)}
+        ind = make_indentor("sphere:5")
+    else:            # no symmetry planes: rotated DOFs need nodes held in all or no directions
+        xs = fine_then_growing(0.3, 0.6, 1.6, 3.0)
+        xs = np.r_[-xs[:0:-1], xs]
+        p, cells, r = box(xs, -fine_then_growing(0.3, 0.6, 1.5, 3.0)[::-1], xs)
+        model = Model(p, cells, np.ones(len(cells), int), {"top": r["ymax"], "bottom": r["ymin"]},
+                      material=[1.0], nu=0.48)
+        prescribed, ind = {"bottom": 0.0}, make_indentor("sphere:5", incline_deg=incline)
     sn = model.surface_nodes("top")
     receptors = model.strain_operator(sn.x[:7] - [0.0, 0.75, 0.0][:dim])
     lazy = ContactModel.from_fe(model, model.system(prescribed), "top", observe=receptors)
     a = lazy.indent(ind, depth_mm=0.2)
-    system = model.system(prescribed, condense=sn.dofs[:, 1])
+    system = model.system(prescribed, condense=(sn.nodes, ind.approach))
     condensed = ContactModel.from_fe(model, system, "top", observe=receptors)
     b = condensed.indent(ind, depth_mm=0.2)
     assert type(condensed.compliance(ind.approach)).__name__ == "CondensedCompliance"
@@ -86,8 +94,8 @@ def test_condensed_compliance_equals_lazy_columns(dim):
     for x, y in [(a.force_N, b.force_N), (a.deflection_mm, b.deflection_mm), (a.observed, b.observed)]:
         assert np.abs(x - y).max() < 1e-9 * np.abs(x).max()
     if dim == 3:
-        tilted = make_indentor("sphere:5", incline_deg=30.0)
-        assert type(condensed.compliance(tilted.approach)).__name__ == "FactorCompliance"
+        other = make_indentor("sphere:5", incline_deg=incline + 10.0)
+        assert type(condensed.compliance(other.approach)).__name__ == "FactorCompliance"
 
 
 def test_receptor_grid_measures_match_solver_sampling():

@@ -146,30 +146,33 @@ def test_system_reuses_factorisation_and_superposes(block3d):
     assert np.abs(r[s1.free]).max() < 1e-10 * np.abs(r).max()
 
 
-def test_condensed_compliance_block_matches_solves(block3d):
-    """system(condense=dofs): the Schur-complement factorisation solves like the plain one and its
-    compliance block equals K_ff^-1 columns from solves; held DOFs give zero rows and columns; a
-    later request for a subset reuses the factor, one for other DOFs refactorises."""
+@pytest.mark.parametrize("direction", [(0.0, -1.0, 0.0), (0.3, -0.8, 0.52)])
+def test_condensed_compliance_matches_solves(block3d, direction):
+    """system(condense=(nodes, direction)): the Schur-complement factorisation (rotated DOFs for a
+    direction off the axes) solves like the plain one, and its compliance equals a^T K_ff^-1 a
+    from solves; held nodes give zero rows and columns; a subset reuses the factor; another
+    direction raises."""
     m = block3d
     prescribed = {"ymin": 0.0}
+    a = np.asarray(direction) / np.linalg.norm(direction)
     plain = m.system(prescribed)
-    top = m.node_dofs(m.region_nodes("ymax"))[:, 1]
-    bottom_y = m.node_dofs(m.region_nodes("ymin"))[:2, 1]
-    cond = m.system(prescribed, condense=top)
-    assert cond._factor is not plain._factor and len(cond.condensed) == len(top)
+    top = m.region_nodes("ymax")
+    cond = m.system(prescribed, condense=(top, a))
+    assert cond._factor is not plain._factor and len(cond.condensed[0]) == len(top)
     F = np.random.default_rng(1).normal(size=(m.ndof, 2)) * 1e-3
-    np.testing.assert_allclose(cond.solve(F), plain.solve(F), rtol=0, atol=1e-12 * np.abs(plain.solve(F)).max())
-    dofs = np.r_[top[::3], bottom_y]
-    C = cond.compliance(dofs)
-    E = np.zeros((m.ndof, len(dofs)))
-    E[dofs, np.arange(len(dofs))] = 1.0
-    ref = plain.solve(E)[dofs]
+    ref = plain.solve(F)
+    assert np.abs(cond.solve(F) - ref).max() < 1e-12 * np.abs(ref).max()
+    nodes = np.r_[top[::3], m.region_nodes("ymin")[:2]]
+    C = cond.compliance(nodes, -a)
+    E = np.zeros((m.ndof, len(nodes)))
+    E[m.node_dofs(nodes), np.arange(len(nodes))[:, None]] = a
+    ref = np.einsum("r,irj->ij", a, plain.solve(E)[m.node_dofs(nodes)])
     assert np.abs(C - ref).max() < 1e-10 * np.abs(ref).max()
     assert np.all(C[-2:] == 0) and np.all(C[:, -2:] == 0)
     np.testing.assert_allclose(C, C.T, rtol=0, atol=1e-14 * np.abs(C).max())
-    assert m.system(prescribed, condense=top[:4])._factor is cond._factor
-    with pytest.raises(ValueError, match="no stored compliance"):
-        cond.compliance(m.node_dofs(m.region_nodes("ymax"))[:, 0])
+    assert m.system(prescribed, condense=(top[:4], a))._factor is cond._factor
+    with pytest.raises(ValueError, match="no compliance along"):
+        cond.compliance(top, (1.0, 0.0, 0.0))
 
 
 def test_operators_match_solution_fields(block3d):
