@@ -42,6 +42,9 @@ Stable API for the contact solver (issue 5)
     system.u0                  # (ndof,) response to the prescribed displacements alone
     system.solve(f)            # f (ndof,) or (ndof, k) nodal forces [N] -> u, same shape, u = 0 on
                                # constrained DOFs; loads on constrained DOFs are ignored
+    system = model.system(prescribed, condense=(nodes, direction))     # + exact compliance block:
+    system.compliance(nodes, direction)        # (k, k) [mm/N] along direction, no solves (Schur
+                               # complement from PARDISO, inverted once; rotated DOFs off the axes)
     u = system.u0 + system.solve(f)            # superposition; system.residual = last relative residual
     model.vertex_dofs(ids) -> (n, dim) int     # DOF indices of mesh vertices (node k has DOFs dim*k + c)
     model.node_dofs(nodes) -> (n, dim) int     # same for any P2 node (vertices first, then midside nodes)
@@ -245,6 +248,7 @@ class _Factor:
                 c[a:b, b:] = c[b:, a:b].T
                 d = c[a:b, a:b]
                 d[:] = np.tril(d) + np.tril(d, -1).T
+            c.flags.writeable = False
             self._block = c
         return self._block
 
@@ -354,10 +358,13 @@ class LinearSystem:
         held = (np.isin(dofs[:, axis[0]], self.fixed) if axis.size else np.isin(dofs, self.fixed).all(axis=1))
         if not (inside | held).all():
             raise ValueError(f"{int((~(inside | held)).sum())} nodes have no stored compliance: factorise with condense=")
-        C = np.zeros((len(nodes), len(nodes)))
         i = np.flatnonzero(inside)
         order = self._factor.condensed_order[pos[i]]
-        C[np.ix_(i, i)] = self._factor.compliance_block()[np.ix_(order, order)]
+        block = self._factor.compliance_block()
+        if len(i) == len(nodes) == len(block) and np.array_equal(order, np.arange(len(block))):
+            return block                                # read-only, shared: no 0.4 GB copy for k = 7,000
+        C = np.zeros((len(nodes), len(nodes)))
+        C[np.ix_(i, i)] = block[np.ix_(order, order)]
         return C
 
     def displacement(self, f: np.ndarray | None = None) -> np.ndarray:
