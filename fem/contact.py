@@ -102,6 +102,7 @@ class Compliance:
 
     def __init__(self, m: int, r: int):
         self.m, self.r = m, r
+        self.held = np.zeros(m, bool)       # nodes that cannot move along the approach (zero compliance)
         self._slot = np.full(m, -1)
         self._store = np.empty((m + r, 0))
         self.computed = 0
@@ -150,6 +151,7 @@ class MatrixCompliance(Compliance):
         R = np.zeros((0, len(C))) if observed is None else np.asarray(observed, float)
         super().__init__(len(C), len(R))
         self._full = np.vstack([C, R])
+        self.held = np.diag(C) == 0
 
     def _compute(self, idx):
         return self._full[:, idx]
@@ -160,10 +162,11 @@ class FactorCompliance(Compliance):
 
     solve: callable (n_dofs, k) load -> (n_dofs, k) displacement (the factorised, constrained
     system); n_dofs: its size; dofs: (m, dim) DOF index of each candidate node's components; direction: (dim,)
-    unit force direction (3,) (its x, y part in 2D); observe: optional sparse (r, n_dofs) observation operator.
+    unit force direction (3,) (its x, y part in 2D); observe: optional sparse (r, n_dofs) observation operator;
+    fixed: optional constrained DOF indices (nodes held along the direction are marked `held`).
     """
 
-    def __init__(self, solve, n_dofs: int, dofs, direction, observe=None, chunk: int = 64):
+    def __init__(self, solve, n_dofs: int, dofs, direction, observe=None, chunk: int = 64, fixed=None):
         dofs = np.asarray(dofs)
         m, dim = dofs.shape
         if dim == 2 and abs(direction[2]) > 1e-12:
@@ -177,6 +180,9 @@ class FactorCompliance(Compliance):
         self.O = sp.vstack([self.B.T, O]).tocsr()
         super().__init__(m, O.shape[0])
         self.solve, self.chunk = solve, chunk
+        if fixed is not None:
+            moves = np.abs(np.asarray(direction, float)[:dim]) > 0
+            self.held = np.all(np.isin(dofs, fixed) | ~moves, axis=1)
 
     def _compute(self, idx):
         out = np.empty((self.m + self.r, len(idx)))
@@ -201,6 +207,7 @@ class CondensedCompliance(FactorCompliance):
     def __init__(self, system, nodes, dofs, direction, observe=None, chunk: int = 64):
         super().__init__(system.solve, system.model.ndof, dofs, direction, observe, chunk)
         self._C = system.compliance(nodes, direction)             # the same for -direction
+        self.held = np.diag(self._C) == 0
 
     def columns(self, idx) -> np.ndarray:
         return self._C[:, np.asarray(idx, int)]
@@ -216,6 +223,10 @@ class CondensedCompliance(FactorCompliance):
         for s in range(0, F.shape[1] if self.r else 0, self.chunk):
             out[:, s:s + self.chunk] = self.O[self.m:] @ self.solve(np.asfortranarray(self.B @ F[:, s:s + self.chunk]))
         return out.reshape((self.r,) + np.shape(force_N)[1:])
+
+
+class BlockedError(InputError):
+    """The indentor would push surface nodes that are held fixed (no finite force can)."""
 
 
 # --------------------------------------------------------------------------- LCP
@@ -382,7 +393,8 @@ class ContactModel:
             try:
                 return CondensedCompliance(system, sn.nodes, sn.dofs, a, observe=observe, chunk=chunk)
             except ValueError:          # not condensed along a (or not these nodes): lazy columns
-                return FactorCompliance(system.solve, model.ndof, sn.dofs, a, observe=observe, chunk=chunk)
+                return FactorCompliance(system.solve, model.ndof, sn.dofs, a, observe=observe, chunk=chunk,
+                                        fixed=system.fixed)
         return cls(sn.x, sn.area, compliance_for, facets=(facets, facet_shares(facets, size, model.dim)), **kw)
 
     @classmethod
@@ -414,6 +426,13 @@ class ContactModel:
         part = np.argmin(s, axis=1)
         gap0 = s[np.arange(len(s)), part]
         sub = np.flatnonzero(np.isfinite(gap0))
+        blocked = sub[comp.held[sub] & (gap0[sub] < -self.tol_mm)]
+        if blocked.size:
+            x = np.round(self.points_mm[blocked[np.argmin(gap0[blocked])]], 2).tolist()
+            raise BlockedError(f"indentor {indentor.name} would push {blocked.size} surface nodes that are held "
+                               f"fixed (the deepest at {x} mm): it reaches the model's fixed boundary (nail or "
+                               f"proximal cut); use a smaller depth or indentor, or move it away from there")
+        sub = sub[~comp.held[sub]]
         q = gap0[sub]
         start = warm[sub] if warm is not None and warm[sub].any() else q < min(0.0, 0.5 * q.min(initial=0))
         lcp = solve_lcp(lambda i: comp.columns(sub[i])[sub], q, start, self.tol_mm)
@@ -495,7 +514,14 @@ class ContactModel:
         lo, hi = np.zeros(n), np.full(n, np.inf)
         warm = self._warm
         for it in range(1, 101):
-            res, lcp, sub = self.solve_travel(indentor, travels(depth), warm)
+            try:
+                res, lcp, sub = self.solve_travel(indentor, travels(depth), warm)
+            except BlockedError as exc:         # too deep: held nodes reached; bisect below
+                if n > 1 or depth[0] - lo[0] < 1e-9:
+                    raise BlockedError(f"force {target} N: {exc}") from None
+                hi = np.minimum(hi, depth)
+                depth = 0.5 * (lo + hi)
+                continue
             warm = res.force_N > 0
             err = (res.part_force_N if equal_force else np.array([res.total_force_N])) - target
             if np.all(np.abs(err) <= FORCE_RTOL * target):

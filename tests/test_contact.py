@@ -163,3 +163,25 @@ def test_matrix_compliance_and_observation():
     np.testing.assert_allclose(b.force_N, a.force_N, atol=1e-12)
     np.testing.assert_allclose(b.observed, b.deflection_mm, atol=1e-12)
     assert b.active.sum() > 10
+
+
+def test_held_nodes_block_the_indentor_with_a_clear_error():
+    """Nodes the body holds fixed have zero compliance: an indentor that would push one raises a
+    one-line InputError (no LCP can give it a finite force); force control bisects below the
+    depth where that happens and still reaches a force attainable before it."""
+    cm, hs = half_space_model(1.0, 0.1)
+    held = np.abs(hs.xz[:, 0] - 0.85) < 0.01                          # a held row at x = 0.85 mm
+    C = hs.columns(np.arange(hs.m))
+    C[held] = 0.0
+    C[:, held] = 0.0
+    blocked = contact.ContactModel(cm.points_mm, cm.areas_mm2, lambda a: contact.MatrixCompliance(C))
+    sphere = make_indentor("sphere:2")
+    ok = blocked.indent(sphere, depth_mm=0.05)                       # contact radius ~0.3 mm: clear of it
+    assert ok.kkt["ok"] and not ok.active[held].any()
+    with pytest.raises(InputError, match="held fixed") as info:
+        blocked.indent(sphere, depth_mm=0.5)                          # reaches x = 0.85 mm
+    assert "\n" not in str(info.value)
+    res = blocked.indent(sphere, force_N=1.2 * ok.total_force_N)     # Newton's first trial is too deep
+    assert abs(res.total_force_N / (1.2 * ok.total_force_N) - 1) < 1e-6
+    with pytest.raises(InputError, match="force .* held fixed"):
+        blocked.indent(sphere, force_N=100 * ok.total_force_N)
