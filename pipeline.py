@@ -321,7 +321,7 @@ def _add_line_load(sub):
     p.add_argument("--position", type=float, nargs=2, metavar=("X", "Z"),
                    help="load position in mm (2D: X; default the middle of the pad)")
     p.add_argument("--out", help="output folder (default: <model>/line_load)")
-    p.add_argument("--quiet", action="store_true", help="no summary")
+    p.add_argument("--quiet", action="store_true", help="no progress and no summary")
     p.set_defaults(run=_run_line_load)
 
 
@@ -331,7 +331,7 @@ def _run_line_load(args):
     text = run_line_load(args.model, args.out or str(Path(args.model) / "line_load"), depths=args.depth,
                          material=args.material, nu=args.nu, large_deformation=args.large_deformation,
                          slip=args.slip, half_width_mm=args.half_width, half_length_mm=args.half_length,
-                         step_mm=args.step, position_mm=args.position)
+                         step_mm=args.step, position_mm=args.position, progress=not args.quiet)
     if not args.quiet:
         print(text)
 

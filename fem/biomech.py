@@ -617,7 +617,7 @@ def fit_force_scale(model_N, measured_N, log10_Pa, depths_mm, match: str = "leas
     return ForceScale(s, v, np.asarray(depths_mm, float), M, F, float(np.sqrt(np.mean((s * F - M) ** 2))), match)
 
 
-# --------------------------------------------------------------------------- cylinder series (thesis figs. 4-24, 4-25, 5-14)
+# --------------------------------------------------------------------------- cylinders (thesis figs. 4-24, 4-25, 5-14)
 @dataclass
 class CylinderSeries:
     """Cylindrical indentors of increasing diameter on one model, at constant forces or depths.
@@ -929,7 +929,8 @@ def run_contact_series(model_dir, out_dir, material=None, cylinders=None, forces
             ax[2].plot(s.diameters_mm, s.depth_mm[j] if s.load_kind == "force" else s.force_N[j], "o-", label=lab)
         ax[0].set(xlabel="cylinder diameter, mm", ylabel=area, title=f"contact vs diameter at constant {s.load_kind}")
         ax[1].set(xlabel="cylinder diameter, mm", ylabel="max contact pressure, MPa", title="peak pressure")
-        ax[2].set(xlabel="cylinder diameter, mm", ylabel="depth, mm" if s.load_kind == "force" else f"force, {force_unit}",
+        ax[2].set(xlabel="cylinder diameter, mm",
+                  ylabel="depth, mm" if s.load_kind == "force" else f"force, {force_unit}",
                   title="depth needed" if s.load_kind == "force" else "force needed")
         for a in ax:
             a.legend(fontsize=7)
@@ -946,7 +947,8 @@ def run_contact_series(model_dir, out_dir, material=None, cylinders=None, forces
 
 
 def run_line_load(model_dir, out_dir, depths="0.05,0.5,1,2", material=None, nu=None, large_deformation=False,
-                  slip=False, half_width_mm=0.25, half_length_mm=1.0, step_mm=0.1, position_mm=None) -> str:
+                  slip=False, half_width_mm=0.25, half_length_mm=1.0, step_mm=0.1, position_mm=None,
+                  progress=False) -> str:
     """`pipeline.py line-load`: line_load.csv / .json / .png in out_dir (linear; with
     large_deformation also the neo-Hookean solve and where the two part)."""
     import json
@@ -964,7 +966,7 @@ def run_line_load(model_dir, out_dir, depths="0.05,0.5,1,2", material=None, nu=N
     parse_code(material)
     c = compare_line_load(model_dir, depth_list, material=material, nu=nu, half_width_mm=half_width_mm,
                           step_mm=step_mm, position_mm=position_mm, slip=slip, half_length_mm=half_length_mm,
-                          large_deformation=large_deformation)
+                          large_deformation=large_deformation, progress=progress)
     plt = _plt()
     with staged_output(out_dir) as tmp:
         rows = [[float(d), float(x), float(a), float(b)] for k, d in enumerate(c.depths_mm)
@@ -1003,8 +1005,8 @@ def run_line_load(model_dir, out_dir, depths="0.05,0.5,1,2", material=None, nu=N
         if float(d) in c.failed:
             text += f"; large deformation failed: {c.failed[float(d)]}"
         elif large_deformation:
-            text += (f", large deformation {c.force_nonlinear_N[k]:.4g} (x{c.force_nonlinear_N[k] / c.force_linear_N[k]:.3f}); "
-                     f"max deflection difference {100 * c.max_difference[k]:.1f} % of the depth; min J {c.min_J[k]:.2f}; "
-                     f"{c.seconds[k]:.1f} s")
+            ratio = c.force_nonlinear_N[k] / c.force_linear_N[k]
+            text += (f", large deformation {c.force_nonlinear_N[k]:.4g} (x{ratio:.3f}); max deflection difference "
+                     f"{100 * c.max_difference[k]:.1f} % of the depth; min J {c.min_J[k]:.2f}; {c.seconds[k]:.1f} s")
         lines.append(text)
     return "\n".join(lines)

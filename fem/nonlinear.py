@@ -41,6 +41,7 @@ most the first size).
 """
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -110,7 +111,8 @@ class NeoHookean:
 
         self.model, self.dim, self.chunk = model, model.dim, int(chunk)
         scalar = Basis(model.mesh, ElementTetP2() if self.dim == 3 else ElementTriP2(), intorder=2)
-        self.grad = np.array([scalar.basis[a][0].grad for a in range(scalar.Nbfun)]).transpose(2, 3, 0, 1)  # (M, nq, nb, d)
+        grads = [scalar.basis[a][0].grad for a in range(scalar.Nbfun)]
+        self.grad = np.array(grads).transpose(2, 3, 0, 1)                                     # (M, nq, nb, d)
         self.dx = scalar.dx                                                                   # (M, nq)
         # the linear solver's layer-discontinuous P1 pressure basis and lumped 1/kappa mass (same
         # element order and quadrature): its small-strain limit is then Model's discretisation
@@ -208,14 +210,15 @@ class NeoHookean:
 
     # ------------------------------------------------------------------ Newton with load stepping
     def solve(self, prescribed, steps: int = 4, tol: float = 1e-10, max_iter: int = 25,
-              max_cuts: int = 8, loads=None, stops=(), partial: bool = False) -> NonlinearResult:
+              max_cuts: int = 8, loads=None, stops=(), partial: bool = False,
+              progress: bool = False) -> NonlinearResult:
         """Prescribed displacements (as `Model.system`: region -> value) applied in `steps` equal
         load steps, adapted (see the module notes; at most max_cuts halvings below 1 / steps).
         tol: Newton stops when the free residual norm is below tol times the reaction norm.
         loads: optional (ndof,) fixed nodal forces [N] scaled with the load factor too.
         stops: load factors in (0, 1) that are landed on exactly (extra converged states).
         A solve that cannot go on raises RuntimeError, or with partial=True returns the states
-        reached with the reason in `stopped`."""
+        reached with the reason in `stopped`. progress: a line on stderr per converged step."""
         import time
 
         start = time.perf_counter()
@@ -258,6 +261,9 @@ class NeoHookean:
             out_J.append(float(self.jacobian(u).min()))
             out_s.append(time.perf_counter() - start)
             hist.append(h)
+            if progress:
+                print(f"large deformation: load factor {t:.4g}, {len(h)} Newton iterations, smallest J "
+                      f"{out_J[-1]:.3g}, {out_s[-1]:.1f} s", file=sys.stderr, flush=True)
         return NonlinearResult(np.array(out_t), np.array(out_u), np.array(out_f), np.array(out_J), np.array(out_s),
                                hist, cuts, stopped)
 
@@ -382,11 +388,12 @@ def line_load_model(model_dir, material=None, nu=None, position_mm=None, half_wi
 
 def compare_line_load(model_dir, depths_mm=(0.05, 0.5, 1.0), material=None, nu=None, half_width_mm=0.0,
                       step_mm: float = 0.1, position_mm=None, slip: bool = False, half_length_mm: float = 1.0,
-                      band_mm: float = 0.25, large_deformation: bool = True) -> LineLoadComparison:
+                      band_mm: float = 0.25, large_deformation: bool = True,
+                      progress: bool = False) -> LineLoadComparison:
     """Linear vs large-deformation surface deflection and force under a prescribed line load. The
     nonlinear solve goes once to the deepest depth in load steps of about step_mm, landing on every
     depth (hyperelastic: the path does not matter); large_deformation=False: the linear solution
-    only, the nonlinear fields NaN."""
+    only, the nonlinear fields NaN. progress: report each load step on stderr."""
     depths = np.asarray(depths_mm, float).ravel()
     if not depths.size or np.any(depths <= 0) or not step_mm > 0 or half_width_mm < 0 or half_length_mm < 0:
         raise InputError(f"line load: depths ({depths.tolist()}) and step ({step_mm}) must be > 0 mm, "
@@ -415,7 +422,7 @@ def compare_line_load(model_dir, depths_mm=(0.05, 0.5, 1.0), material=None, nu=N
     newton, failed = [[] for _ in range(n)], {}
     if large_deformation:
         res = NeoHookean(model).solve(pres, steps=max(1, int(np.ceil(deepest / step_mm - 1e-9))),
-                                      stops=depths / deepest, partial=True)
+                                      stops=depths / deepest, partial=True, progress=progress)
         for k, depth in enumerate(depths):
             hit = np.flatnonzero(np.abs(res.t * deepest - depth) < 1e-9 * deepest)
             if not hit.size:
