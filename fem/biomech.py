@@ -722,7 +722,7 @@ def idealised_fits(profile: Profile, max_distance_mm=None) -> dict:
 
 
 def _finish(plt, fig, ax, data, path):
-    """Add the measured profiles and legends to a linear/log pair of axes and save the figure."""
+    """Add the measured profiles (if any) and legends to the axes and save the figure."""
     _plot_data(ax, data)
     for a in ax:
         a.legend(fontsize=6)
@@ -932,11 +932,7 @@ def run_contact_series(model_dir, out_dir, material=None, cylinders=None, forces
         ax[2].set(xlabel="cylinder diameter, mm",
                   ylabel="depth, mm" if s.load_kind == "force" else f"force, {force_unit}",
                   title="depth needed" if s.load_kind == "force" else "force needed")
-        for a in ax:
-            a.legend(fontsize=7)
-        fig.tight_layout()
-        fig.savefig(tmp / "cylinder_series.png", dpi=100)
-        plt.close(fig)
+        _finish(plt, fig, ax, [], tmp / "cylinder_series.png")
     lines = [f"cylinder series {', '.join(s.codes)} ({material}, constant {s.load_kind}) in {out_dir} "
              f"({time.perf_counter() - t0:.1f} s)"]
     for j, v in enumerate(s.loads):
@@ -993,11 +989,7 @@ def run_line_load(model_dir, out_dir, depths="0.05,0.5,1,2", material=None, nu=N
         if large_deformation:
             ax[1].plot(c.depths_mm, c.force_nonlinear_N, "s--", label="large deformation")
         ax[1].set(xlabel="depth, mm", ylabel="force, " + ("N/mm" if c.dim == 2 else "N"), title="force vs depth")
-        for a in ax:
-            a.legend(fontsize=7)
-        fig.tight_layout()
-        fig.savefig(tmp / "line_load.png", dpi=100)
-        plt.close(fig)
+        _finish(plt, fig, ax, [], tmp / "line_load.png")
     lines = [f"line load on {model_dir} ({material}, patch half width {half_width_mm:g} mm, "
              f"{'sliding' if slip else 'held'} sideways) in {out_dir} ({report['seconds']} s)"]
     for k, d in enumerate(c.depths_mm):
