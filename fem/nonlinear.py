@@ -29,7 +29,7 @@ same reason). First Piola stress and exact tangent (c = mu J^(-2/d)):
 solved as the sparse symmetric saddle system [[K_F, G^T], [G, -D]] (MKL PARDISO LDL^T through
 pypardiso, one step of iterative refinement; SciPy SuperLU without pypardiso). Load steps scale
 all prescribed displacements; the first Newton iteration of a step moves the prescribed DOFs with
-the tangent predictor; later steps are backtracked (halved up to 6 times) when they do not lower
+the tangent predictor; later iterations are backtracked (halved up to 6 times) when they do not lower
 the residual or would invert an element. A load step whose Newton iteration fails (J <= 0 at a
 quadrature point, or no convergence in max_iter) is halved, up to max_cuts times below the first
 step size; after two steps that converge in at most 6 iterations the step grows back (x 2, at
