@@ -159,20 +159,13 @@ class DeflectionExperiment:
 
     def __init__(self, model_dir, indentor: str = "wedge", orientation=None, position_mm=None,
                  nu=None, band_mm: float = 0.25, side: str = "mean", max_factors: int = 4):
-        import json
-        from pathlib import Path
-
-        from fem.solver import Model
+        from fem.contact import CONTACT_REGION, read_model
 
         _fast_pardiso()
         self.model_dir, self.nu, self.band_mm, self.side = model_dir, nu, band_mm, side
         self.indentor_code = indentor
-        folder = Path(model_dir)
-        if not (folder / "mesh.vtu").is_file():
-            raise InputError(f"no mesh.vtu in '{model_dir}': run `pipeline.py mesh` first or give a model folder")
-        info = json.loads((folder / "model.json").read_text()) if (folder / "model.json").is_file() else {}
-        model = Model.from_mesh(folder / "mesh.vtu", material=info.get("material", "m33338"))   # geometry only
-        region = "volar" if model.dim == 3 else "surface"          # as fem.contact.open_model
+        model, info = read_model(model_dir)                         # geometry only
+        region = CONTACT_REGION[model.dim]
         self.dim, self.region, self.info = model.dim, region, info
         self.n_layers = len(set(model.layer.tolist()))
         sn = model.surface_nodes(region)

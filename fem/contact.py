@@ -615,10 +615,19 @@ def _check_keys(table, allowed, where):
         raise InputError(f"unknown key(s) {sorted(unknown)} in {where}; allowed: {sorted(allowed)}")
 
 
-def open_model(model_dir, material=None, nu=None):
-    """(fem.solver.Model, LinearSystem, contact region name, model.json dict) of a model folder:
-    3D nail and proximal cut fixed, support normal held, contact on `volar`; 2D `fixed` held,
-    contact on `surface`. Regions the mesh lacks (meshes older than the region) are skipped."""
+# The proximal cut is where the distal phalanx joins the rest of the finger, which the experiments
+# hold still (thesis 2.2.2: hand restrained, no joint moves; 6.2.1: the ends' boundary conditions
+# differ markedly and deformation fades faster proximally). Left free, the cut swung by 12.5 % of a
+# 2 mm line load on the human preset (README "Indentation").
+HELD = {3: {"nail": 0.0, "support": (None, 0.0, None), "proximal": 0.0}, 2: {"fixed": 0.0}}
+"""Constraints of a model folder per dimension: 3D nail and proximal cut fixed, support held along
+its normal; 2D `fixed` held (`held_regions` skips regions a mesh lacks, e.g. older meshes)."""
+CONTACT_REGION = {3: "volar", 2: "surface"}
+"""Contact candidate region of a model folder per dimension."""
+
+
+def read_model(model_dir, material=None, nu=None):
+    """(fem.solver.Model, model.json dict) of a model folder; material and nu default to model.json's."""
     import json
     from pathlib import Path
 
@@ -630,19 +639,24 @@ def open_model(model_dir, material=None, nu=None):
     info = json.loads((folder / "model.json").read_text()) if (folder / "model.json").is_file() else {}
     model = Model.from_mesh(folder / "mesh.vtu", material=material or info.get("material", "m33338"),
                             nu=info.get("nu", 0.48) if nu is None else nu)
-    if model.dim == 3:
-        # The proximal cut is where the distal phalanx joins the rest of the finger, which the
-        # experiments hold still (thesis 2.2.2: hand restrained, no joint moves; 6.2.1: the ends'
-        # boundary conditions differ markedly and deformation fades faster proximally). Left free,
-        # the cut swung by 12.5 % of a 2 mm line load on the human preset (README "Indentation").
-        prescribed, region = {"nail": 0.0, "support": (None, 0.0, None), "proximal": 0.0}, "volar"
-    else:
-        prescribed, region = {"fixed": 0.0}, "surface"
-    prescribed = {k: v for k, v in prescribed.items() if k in model.regions}
-    sn = model.surface_nodes(region)                # condense the candidates along the approach
+    return model, info
+
+
+def held_regions(model) -> dict:
+    """`HELD` for the model's dimension, restricted to the regions its mesh has."""
+    return {k: v for k, v in HELD[model.dim].items() if k in model.regions}
+
+
+def open_model(model_dir, material=None, nu=None):
+    """(fem.solver.Model, LinearSystem, contact region name, model.json dict) of a model folder,
+    held as `HELD` says, factorised with the contact candidates condensed along the approach
+    (minus the support's vertical_up) when there are at most CONDENSE_MAX_NODES of them."""
+    model, info = read_model(model_dir, material, nu)
+    region = CONTACT_REGION[model.dim]
+    sn = model.surface_nodes(region)
     up = info.get("regions", {}).get("support", {}).get("vertical_up", [0.0, 1.0, 0.0])
     condense = (sn.nodes, -np.asarray(up, float)) if len(sn.nodes) <= CONDENSE_MAX_NODES else None
-    return model, model.system(prescribed, condense=condense), region, info
+    return model, model.system(held_regions(model), condense=condense), region, info
 
 
 def run_scene(model_dir, out_dir, scene: dict, progress: bool = True) -> str:

@@ -346,11 +346,6 @@ class LineLoadComparison:
     dim: int
 
 
-#: constraints of a model folder without the load: a copy of fem.contact.open_model's (which does
-#: not expose them); regions a mesh lacks are skipped
-HELD = {2: {"fixed": 0.0}, 3: {"nail": 0.0, "support": (None, 0.0, None), "proximal": 0.0}}
-
-
 def line_load_model(model_dir, material=None, nu=None, position_mm=None, half_width_mm: float = 0.0,
                     half_length_mm: float = 1.0):
     """(fem.solver.Model with a 'load' region, load position (x0, z0) [mm]) of a model folder.
@@ -359,18 +354,11 @@ def line_load_model(model_dir, material=None, nu=None, position_mm=None, half_wi
     at least the nearest vertex). 3D: a wedge across the finger axis (thesis 6.2.1): the volar
     vertices within half_width_mm of z = z0 (default the middle of the volar z range) and within
     half_length_mm of x = x0 (default 0), at least the nearest vertex."""
-    import json
-    from pathlib import Path
-
+    from fem.contact import CONTACT_REGION, read_model
     from fem.solver import Model
 
-    folder = Path(model_dir)
-    info = json.loads((folder / "model.json").read_text()) if (folder / "model.json").is_file() else {}
-    if not (folder / "mesh.vtu").is_file():
-        raise InputError(f"no mesh.vtu in '{model_dir}': run `pipeline.py mesh` first")
-    t = Model.from_mesh(folder / "mesh.vtu", material=material or info.get("material", "m33338"),
-                        nu=info.get("nu", 0.48) if nu is None else nu)
-    sn = t.surface_nodes("surface" if t.dim == 2 else "volar")
+    t, info = read_model(model_dir, material, nu)
+    sn = t.surface_nodes(CONTACT_REGION[t.dim])
     verts = sn.nodes[sn.nodes < t.mesh.nvertices]
     x = t.mesh.p[:, verts]
     if t.dim == 2:
@@ -398,9 +386,11 @@ def compare_line_load(model_dir, depths_mm=(0.05, 0.5, 1.0), material=None, nu=N
     if not depths.size or np.any(depths <= 0) or not step_mm > 0 or half_width_mm < 0 or half_length_mm < 0:
         raise InputError(f"line load: depths ({depths.tolist()}) and step ({step_mm}) must be > 0 mm, "
                          f"half width ({half_width_mm}) and half length ({half_length_mm}) >= 0 mm")
+    from fem.contact import CONTACT_REGION, held_regions
+
     model, pos = line_load_model(model_dir, material, nu, position_mm, half_width_mm, half_length_mm)
     d = model.dim
-    sn = model.surface_nodes("surface" if d == 2 else "volar")
+    sn = model.surface_nodes(CONTACT_REGION[d])
     if d == 2:
         along = sn.x[:, 0] - pos[0]
         on = np.ones(len(along), bool)
@@ -413,7 +403,7 @@ def compare_line_load(model_dir, depths_mm=(0.05, 0.5, 1.0), material=None, nu=N
     deepest = float(depths.max())
     push = [None if slip else 0.0] * d
     push[1] = -deepest
-    pres = {**{k: v for k, v in HELD[d].items() if k in model.regions}, "load": tuple(push)}
+    pres = {**held_regions(model), "load": tuple(push)}
     unit = model.system(pres).u0 / deepest                     # linear: proportional to the depth
     lin = depths[:, None] * -unit[ydofs]
     f_lin = depths * -float((model.K @ unit)[load].sum())

@@ -49,7 +49,7 @@ class Reconstruction:
             f"from centre, tilt {fr.tilt_deg:+.3f} deg (fit rms {self.axis_fit.get('axis_fit_rms_mm', 0) * 1000:.1f} um)",
             f"sections        {len(self.z_mm)}, z {self.z_mm[0]:.2f} .. {self.z_mm[-1]:.2f} mm, "
             f"spacing {dz.min():.2f} .. {dz.max():.2f} mm",
-            f"trimmed         " + "; ".join(f"{k}: {v}" for k, v in self.trims.items()),
+            "trimmed         " + "; ".join(f"{k}: {v}" for k, v in self.trims.items()),
             f"surface         {len(self.surface.faces)} triangles, volume {self.surface.volume:.1f} mm^3, "
             f"watertight {self.surface.is_watertight}",
             "timings         " + ", ".join(f"{k} {v:.2f} s" for k, v in self.timings_s.items()),
