@@ -12,17 +12,23 @@ positive definite. With the indentor tip travelled t along a, the gap after defo
 
 solved by block principal pivoting (Judice and Pires 1994; Murty's single-pivot rule as the
 finite-termination backup), which only needs the compliance columns of the nodes it tries as
-active: they are computed lazily with the factorised stiffness, many right-hand sides at once,
-and cached, so sweeps and depth or force iterations reuse them. Every solve reports its KKT
-residuals (penetration, tensile force, complementarity).
+active. When the system was factorised with the candidates condensed along the approach
+(`Model.system(condense=(nodes, a))`, as `open_model` does), C is the inverse of their Schur
+complement, all of it at once with no solves (`CondensedCompliance`); otherwise its columns are
+computed lazily with the factorised stiffness, many right-hand sides at once, and cached
+(`FactorCompliance`). Either way sweeps and depth or force iterations reuse them. Candidates held
+along the approach (zero compliance) never carry force; an indentor that would push one is an
+error. Every solve reports its KKT residuals (penetration, tensile force, complementarity).
 
 Contact pressure is recovered from the nodal forces: nodal force / tributary area, averaged over
 each surface facet and back to the nodes (`smoothed_pressure`) when the facets are known, plain
 f_i / A_i otherwise. Contact area is the sum of the tributary areas of the nodes carrying force
 (node-based; in 2D it is the contact width per unit length).
 Quantities at other points (receptor strains, deflections) are an observation matrix O times the
-displacement: their response to the contact forces is cached column by column too, so receptor
-strains cost a small matrix times the contact forces per indentation.
+displacement. With lazy columns their response is cached with each column (a small matrix times
+the contact forces per indentation); with a condensed compliance they take one solve per
+indentation, deferred until a result's `observed` is read and then done for every waiting
+indentation together, 64 right-hand sides per solve.
 
 P2 meshes: every trace node (vertices and edge midpoints) is a contact node with the solver's
 tributary areas. Node-to-surface constraints on P2 give accurate force, contact size and
@@ -504,7 +510,8 @@ class ContactModel:
         """Newton on the depth(s) with the exact Jacobian of the current active set, safeguarded:
         each step at most doubles or halves the depth, and (one unknown) stays inside the
         bracket of depths known to give too little / too much force. Deep trial depths are
-        avoided because every newly touching node costs one compliance column."""
+        avoided because with lazy columns every newly touching node costs one compliance column;
+        a trial depth that would push held nodes counts as too deep."""
         if not target > 0:
             raise InputError(f"force must be positive, got {target} N")
         n = indentor.n_parts if equal_force else 1
