@@ -48,6 +48,8 @@ Any other elastic body works through `ContactModel(points, areas, compliance_for
 """
 from __future__ import annotations
 
+import contextlib
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -191,11 +193,16 @@ class FactorCompliance(Compliance):
             self.held = np.all(np.isin(dofs, fixed) | ~moves, axis=1)
 
     def _compute(self, idx):
-        out = np.empty((self.m + self.r, len(idx)))
-        for s in range(0, len(idx), self.chunk):
-            sel = idx[s:s + self.chunk]
-            u = np.asarray(self.solve(self.B[:, sel].toarray())).reshape(self.n_dofs, -1)
-            out[:, s:s + len(sel)] = self.O @ u
+        return self._respond(self.B[:, idx])
+
+    def _respond(self, loads) -> np.ndarray:
+        """(m + r, k) O K^-1 loads for sparse loads (n_dofs, k) [N], `chunk` columns per solve
+        (only a chunk is ever dense)."""
+        loads = sp.csc_matrix(loads)
+        out = np.empty((self.m + self.r, loads.shape[1]))
+        for s in range(0, loads.shape[1], self.chunk):
+            u = self.solve(np.asfortranarray(loads[:, s:s + self.chunk].toarray()))
+            out[:, s:s + self.chunk] = self.O @ np.asarray(u).reshape(self.n_dofs, -1)
         return out
 
     def displacement(self, force_N) -> np.ndarray:
@@ -225,9 +232,7 @@ class CondensedCompliance(FactorCompliance):
         """(r,) or (r, k) observed response to nodal contact forces (m,) or (m, k): one solve per
         force vector, `chunk` of them per call."""
         F = np.asarray(force_N, float).reshape(self.m, -1)
-        out = np.zeros((self.r, F.shape[1]))
-        for s in range(0, F.shape[1] if self.r else 0, self.chunk):
-            out[:, s:s + self.chunk] = self.O[self.m:] @ self.solve(np.asfortranarray(self.B @ F[:, s:s + self.chunk]))
+        out = self._respond(self.B @ sp.csc_matrix(F))[self.m:] if self.r else np.zeros((0, F.shape[1]))
         return out.reshape((self.r,) + np.shape(force_N)[1:])
 
 
@@ -236,20 +241,17 @@ class BlockedError(InputError):
 
 
 # --------------------------------------------------------------------------- LCP
-_CONTROLLER = []
+@functools.cache
+def _thread_controller():
+    """threadpoolctl's view of the loaded BLAS libraries (scanning them costs ~6 ms: done once)."""
+    from threadpoolctl import ThreadpoolController
+
+    return ThreadpoolController()
 
 
 def _blas_threads(limit):
-    """Context limiting BLAS threads (None: no limit); the library scan is done once (~6 ms)."""
-    from contextlib import nullcontext
-
-    from threadpoolctl import ThreadpoolController
-
-    if limit is None:
-        return nullcontext()
-    if not _CONTROLLER:
-        _CONTROLLER.append(ThreadpoolController())
-    return _CONTROLLER[0].limit(limits=limit, user_api="blas")
+    """Context limiting BLAS threads (None: no limit)."""
+    return contextlib.nullcontext() if limit is None else _thread_controller().limit(limits=limit, user_api="blas")
 
 
 @dataclass
