@@ -29,24 +29,38 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from fem.contact import ContactModel, open_model  # noqa: E402
+from fem.contact import CONTACT_REGION, MAX_DEPTH_MM, ContactModel, factorise, reach, read_model  # noqa: E402
 from fem.indentors import make_indentor  # noqa: E402
 from fem.receptors import ReceptorSampler, receptor_grid  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results" / "contact_bench.md"
 
 
-def _setup(model_dir, middle_line=False):
+def _setup(model_dir, middle_line=False, plan=None):
     """Model, factorisation, receptors (3 depths; along the section through the middle of the pad
-    when middle_line) and the contact model; returns them with the setup time in s."""
+    when middle_line) and the contact model; returns them with the setup time in s. plan:
+    optional (indentor, offsets (k, 3) mm, deepest depth mm): as in `pipeline.py indent`, only the
+    candidates the indentor (moved by `_middle`) can reach are condensed (fem.contact.reach)."""
     t = time.perf_counter()
-    model, system, region, info = open_model(model_dir)
+    model, info = read_model(model_dir)
+    region = CONTACT_REGION[model.dim]
     sn = model.surface_nodes(region)
+    touched = None
+    if plan is not None:
+        indentor, offsets, deepest = plan
+        touched = sn.nodes[reach(sn.x, _middle(indentor, sn.x), offsets, deepest)]
+    system = factorise(model, info, touched)
     line = (2, 0.5 * (sn.x[:, 2].min() + sn.x[:, 2].max())) if middle_line and model.dim == 3 else None
     grid = receptor_grid(sn.x, sn.normal, (0.5, 0.75, 1.0), 1.0 if model.dim == 3 else 0.5, line)
     sampler = ReceptorSampler(model, grid)
     cm = ContactModel.from_fe(model, system, region, observe=sampler.operator)
     return model, system, region, sampler, cm, time.perf_counter() - t
+
+
+def _middle(indentor, points_mm):
+    """3D: the indentor moved along z to the middle of the candidates (m, 3); 2D: as is."""
+    z = points_mm[:, -1]
+    return indentor.shifted([0.0, 0.0, 0.5 * (z.min() + z.max())]) if points_mm.shape[1] == 3 else indentor
 
 
 def _check(model, system, region, sampler, indentor, result, load):
@@ -61,10 +75,9 @@ def _check(model, system, region, sampler, indentor, result, load):
 
 def _run(name, model_dir, indentor, offsets, loads, target_s, checks=5, middle_line=False):
     """Every load at every offset (k, 3) mm from the middle of the pad; one table row."""
-    model, system, region, sampler, cm, setup_s = _setup(model_dir, middle_line)
-    if model.dim == 3:
-        z = cm.points_mm[:, 2]
-        indentor = indentor.shifted([0.0, 0.0, 0.5 * (z.min() + z.max())])
+    deepest = max(ld.get("depth_mm", ld.get("max_depth_mm", MAX_DEPTH_MM)) for ld in loads)
+    model, system, region, sampler, cm, setup_s = _setup(model_dir, middle_line, (indentor, offsets, deepest))
+    indentor = _middle(indentor, cm.points_mm)
     cases = [(off, load) for off in offsets for load in loads]
     t = time.perf_counter()
     results = [cm.sweep(indentor, off[None], **load)[0] for off, load in cases]

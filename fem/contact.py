@@ -111,6 +111,7 @@ class Compliance:
     def __init__(self, m: int, r: int):
         self.m, self.r = m, r
         self.held = np.zeros(m, bool)       # nodes that cannot move along the approach (zero compliance)
+        self.reach = np.ones(m, bool)       # nodes whose compliance is available (see CondensedCompliance)
         self._slot = np.full(m, -1)
         self._store = np.empty((m + r, 0))
         self.computed = 0
@@ -134,6 +135,10 @@ class Compliance:
         idx = np.asarray(idx, int)
         self._ensure(idx)
         return self._store[:self.m, self._slot[idx]]
+
+    def block(self, rows, cols) -> np.ndarray:
+        """(len(rows), len(cols)) compliance (mm/N) between candidate nodes."""
+        return self.columns(cols)[np.asarray(rows, int)]
 
     def observed(self, idx) -> np.ndarray:
         """(r, k) observed response per unit force at candidate nodes idx."""
@@ -215,25 +220,48 @@ class CondensedCompliance(FactorCompliance):
     the candidates (`LinearSystem.compliance`: the inverse of their Schur complement, no solves);
     observations take one solve per indentation (in blocks, `ContactModel.observe_pending`)
     instead of cached columns. Arguments as FactorCompliance, plus the LinearSystem and the
-    candidates' P2 node ids (m,)."""
+    candidates' P2 node ids (m,).
+
+    When only some candidates were condensed (`reach`, e.g. those a scene's indentors can touch),
+    compliance rows of the others are NaN: they cannot carry force, and their deflection comes
+    with the observation solve. Raises ValueError when none was condensed along the direction."""
 
     def __init__(self, system, nodes, dofs, direction, observe=None, chunk: int = 64):
         super().__init__(system.solve, system.model.ndof, dofs, direction, observe, chunk)
-        self._C = system.compliance(nodes, direction)             # the same for -direction
-        self.held = np.diag(self._C) == 0
+        self.reach = system.stored(nodes, direction)                # the same for -direction
+        if not self.reach.any():
+            raise ValueError("no candidate has a stored compliance along this direction")
+        self._C = system.compliance(np.asarray(nodes)[self.reach], direction)
+        self._row = np.cumsum(self.reach) - 1                       # candidate -> row of _C
+        self.held = np.zeros(self.m, bool)
+        self.held[self.reach] = np.diag(self._C) == 0
 
     def columns(self, idx) -> np.ndarray:
-        return self._C[:, np.asarray(idx, int)]
+        idx = np.asarray(idx, int)
+        if self.reach.all():
+            return self._C[:, idx]
+        out = np.full((self.m, len(idx)), np.nan)
+        out[self.reach] = self._C[:, self._row[idx]]
+        return out
+
+    def block(self, rows, cols) -> np.ndarray:
+        return self._C[np.ix_(self._row[np.asarray(rows, int)], self._row[np.asarray(cols, int)])]
 
     def observed(self, idx) -> np.ndarray:
         raise NotImplementedError("a condensed compliance observes whole force vectors: use observe()")
 
-    def observe(self, force_N) -> np.ndarray:
-        """(r,) or (r, k) observed response to nodal contact forces (m,) or (m, k): one solve per
-        force vector, `chunk` of them per call."""
+    def response(self, force_N) -> tuple[np.ndarray, np.ndarray]:
+        """((m, k) deflections of every candidate along the direction, (r, k) observed response) to
+        nodal contact forces (m, k): one solve per force vector, `chunk` of them per call."""
         F = np.asarray(force_N, float).reshape(self.m, -1)
-        out = self._respond(self.B @ sp.csc_matrix(F))[self.m:] if self.r else np.zeros((0, F.shape[1]))
-        return out.reshape((self.r,) + np.shape(force_N)[1:])
+        out = self._respond(self.B @ sp.csc_matrix(F))
+        return out[:self.m], out[self.m:]
+
+    def observe(self, force_N) -> np.ndarray:
+        """(r,) or (r, k) observed response to nodal contact forces (m,) or (m, k)."""
+        if not self.r:
+            return np.zeros((0,) + np.shape(force_N)[1:])
+        return self.response(force_N)[1].reshape((self.r,) + np.shape(force_N)[1:])
 
 
 class BlockedError(InputError):
@@ -311,14 +339,29 @@ class ContactResult:
     depth_mm: np.ndarray            # (n_parts,) travel beyond first touch of each part
     travel_mm: np.ndarray           # (n_parts,) tip travel from the indentor origin
     force_N: np.ndarray             # (m,) nodal contact force (N; N/mm in 2D)
-    gap_mm: np.ndarray              # (m,) gap after deformation (inf outside the footprint)
-    deflection_mm: np.ndarray       # (m,) displacement along the approach direction
+    _gap_mm: np.ndarray             # (m,) gap after deformation (inf outside the footprint): gap_mm
+    _deflection_mm: np.ndarray      # (m,) displacement along the approach direction: deflection_mm
     part: np.ndarray                # (m,) index of the indentor part facing each node
     pressure_MPa: np.ndarray        # (m,) contact pressure (facet-averaged nodal force / area)
     area_mm2: np.ndarray            # (m,) tributary areas
     kkt: dict = field(default_factory=dict)
     _observed: np.ndarray | None = field(default=None, repr=False)
     _source: "ContactModel | None" = field(default=None, repr=False)
+    _unseen: np.ndarray | None = field(default=None, repr=False)    # candidates outside the reach
+
+    @property
+    def gap_mm(self) -> np.ndarray:
+        """(m,) gap after deformation [mm] (inf outside the indentor's footprint)."""
+        if self._unseen is not None and self._source is not None:
+            self._source.observe_pending()
+        return self._gap_mm
+
+    @property
+    def deflection_mm(self) -> np.ndarray:
+        """(m,) displacement along the approach direction [mm]."""
+        if self._unseen is not None and self._source is not None:
+            self._source.observe_pending()
+        return self._deflection_mm
 
     @property
     def observed(self) -> np.ndarray:
@@ -441,15 +484,23 @@ class ContactModel:
                                f"fixed (the deepest at {x} mm): it reaches the model's fixed boundary (nail or "
                                f"proximal cut); use a smaller depth or indentor, or move it away from there")
         sub = sub[~comp.held[sub]]
+        far = sub[~comp.reach[sub]]
+        if far.size and gap0[far].min() < -self.tol_mm:
+            x = np.round(self.points_mm[far[np.argmin(gap0[far])]], 2).tolist()
+            raise InputError(f"indentor {indentor.name} reaches surface nodes (the deepest at {x} mm) outside "
+                             f"the candidates condensed when the model was factorised: factorise with "
+                             f"candidates covering this indentation (fem.contact.reach)")
+        sub = sub[comp.reach[sub]]
         q = gap0[sub]
         start = warm[sub] if warm is not None and warm[sub].any() else q < min(0.0, 0.5 * q.min(initial=0))
-        lcp = solve_lcp(lambda i: comp.columns(sub[i])[sub], q, start, self.tol_mm)
+        lcp = solve_lcp(lambda i: comp.block(sub, sub[i]), q, start, self.tol_mm)
         m = len(self.points_mm)
         f = np.zeros(m)
         f[sub] = lcp.force
         act = sub[lcp.active]
         w = comp.columns(act) @ f[act] if act.size else np.zeros(m)
-        g = gap0 + w
+        unseen = np.flatnonzero(np.isnan(w))            # outside the reach: with the observation solve
+        g = gap0 + np.where(np.isnan(w), 0.0, w)
         if self.facets is not None:
             pressure = smoothed_pressure(f, *self.facets)
         else:
@@ -459,6 +510,7 @@ class ContactModel:
         res = ContactResult(indentor.name, travel - t0, travel.copy(), f, g, w, part, pressure,
                             self.areas_mm2, _kkt(f[sub], g[sub], self.tol_mm))
         res.kkt["iterations"] = lcp.iterations
+        res._unseen = unseen if unseen.size else None
         return res, lcp, sub
 
     def indent(self, indentor, depth_mm=None, force_N=None, equal_force=False,
@@ -504,9 +556,22 @@ class ContactModel:
         pending, self._pending = self._pending, []
         for comp in {id(c): c for _, c in pending}.values():
             group = [r for r, c in pending if c is comp]
-            obs = comp.observe(np.stack([r.force_N for r in group], axis=1))
+            F = np.stack([r.force_N for r in group], axis=1)
+            if comp.reach.all():
+                obs = comp.observe(F)
+            else:
+                defl, obs = comp.response(F)
             for j, r in enumerate(group):
                 r._observed, r._source = obs[:, j], None
+                if r._unseen is not None:
+                    rows, r._unseen = r._unseen, None
+                    r._deflection_mm[rows] = defl[rows, j]
+                    r._gap_mm[rows] += defl[rows, j]
+                    if r._gap_mm[rows].min() < -self.tol_mm:
+                        x = np.round(self.points_mm[rows[np.argmin(r._gap_mm[rows])]], 2).tolist()
+                        raise InputError(f"indentor {r.indentor_name}: the skin touched it at {x} mm, outside the "
+                                         f"candidates condensed when the model was factorised: factorise with "
+                                         f"a larger reach margin (fem.contact.reach)")
 
     def _force(self, indentor, target, equal_force, max_depth_mm, t0):
         """Newton on the depth(s) with the exact Jacobian of the current active set, safeguarded:
@@ -656,22 +721,51 @@ def held_regions(model) -> dict:
     return {k: v for k, v in HELD[model.dim].items() if k in model.regions}
 
 
-def open_model(model_dir, material=None, nu=None, progress: bool = False):
-    """(fem.solver.Model, LinearSystem, contact region name, model.json dict) of a model folder,
-    held as `HELD` says, factorised with the contact candidates condensed along the approach
-    (minus the support's vertical_up) when there are at most CONDENSE_MAX_NODES of them.
-    progress: say on stderr what is being factorised (a minute for a 300k-DOF model)."""
+def approach_down(info) -> np.ndarray:
+    """(3,) default approach of a model folder: minus its support's vertical_up (-y if none)."""
+    return -np.asarray(info.get("regions", {}).get("support", {}).get("vertical_up", [0.0, 1.0, 0.0]), float)
+
+
+def factorise(model, info, candidates=None, progress: bool = False):
+    """LinearSystem of a model folder's model, held as `HELD` says, factorised with contact
+    candidates condensed along `approach_down` when there are at most CONDENSE_MAX_NODES of them.
+    candidates: P2 node ids (default: every node of the contact region), e.g. `reach` of the
+    indentations to come: fewer condensed nodes factorise faster (284k DOFs: 88 CPU-s with all
+    6,848 volar nodes, about 55 with 2,400). progress: say on stderr what is being factorised."""
     import sys
 
-    model, info = read_model(model_dir, material, nu)
-    region = CONTACT_REGION[model.dim]
-    sn = model.surface_nodes(region)
-    up = info.get("regions", {}).get("support", {}).get("vertical_up", [0.0, 1.0, 0.0])
-    condense = (sn.nodes, -np.asarray(up, float)) if len(sn.nodes) <= CONDENSE_MAX_NODES else None
+    nodes = model.surface_nodes(CONTACT_REGION[model.dim]).nodes if candidates is None else candidates
+    condense = (nodes, approach_down(info)) if 0 < len(nodes) <= CONDENSE_MAX_NODES else None
     if progress:
-        print(f"factorising {model.ndof} DOFs" + (f" with {len(sn.nodes)} contact candidates condensed"
+        print(f"factorising {model.ndof} DOFs" + (f" with {len(nodes)} contact candidates condensed"
               if condense else "") + " ...", file=sys.stderr, flush=True)
-    return model, model.system(held_regions(model), condense=condense), region, info
+    return model.system(held_regions(model), condense=condense)
+
+
+def open_model(model_dir, material=None, nu=None, progress: bool = False):
+    """(fem.solver.Model, LinearSystem, contact region name, model.json dict) of a model folder,
+    factorised with every contact candidate condensed (`factorise`)."""
+    model, info = read_model(model_dir, material, nu)
+    return model, factorise(model, info, progress=progress), CONTACT_REGION[model.dim], info
+
+
+REACH_MARGIN_MM = 0.25
+"""Allowance (mm) beyond an indentation's depth within which `reach` includes candidate nodes."""
+
+
+def reach(points_mm, indentor, offsets_mm, depth_mm: float, margin_mm: float = REACH_MARGIN_MM) -> np.ndarray:
+    """(m,) bool: candidate nodes (m, dim) mm that `indentor`, moved by any of the offsets (k, 3) mm
+    and pushed up to depth_mm beyond each part's first touch, overlaps in the undeformed state
+    (within margin_mm). Only these can carry force: on the fingertip models (monkey, cylinders
+    C1-C8, bar, sphere, wedge, step, punch to 3 mm) no node outside the undeformed overlap touched
+    (the skin around an indentor moves away from it), and ContactModel checks it on every result."""
+    mask = np.zeros(len(points_mm), bool)
+    for off in np.atleast_2d(offsets_mm):
+        s = indentor.shifted(off).part_standoff(points_mm)                      # (m, parts)
+        t0 = s.min(axis=0)
+        with np.errstate(invalid="ignore"):
+            mask |= np.any(s - t0 <= depth_mm + margin_mm, axis=1)
+    return mask
 
 
 def run_scene(model_dir, out_dir, scene: dict, progress: bool = True) -> str:
@@ -684,8 +778,38 @@ def run_scene(model_dir, out_dir, scene: dict, progress: bool = True) -> str:
     from reconstruct.io import staged_output, write_json
 
     t_start = time.perf_counter()
-    model, system, region, info = open_model(model_dir, scene.get("material"), scene.get("nu"), progress)
+    model, info = read_model(model_dir, scene.get("material"), scene.get("nu"))
+    region = CONTACT_REGION[model.dim]
     sn = model.surface_nodes(region)
+    middle_z = 0.5 * (sn.x[:, 2].min() + sn.x[:, 2].max()) if model.dim == 3 else 0.0
+    plans, touched = [], np.zeros(len(sn.nodes), bool)
+    for k, exp in enumerate(scene["experiment"]):
+        name = str(exp.get("name", f"experiment{k + 1}"))
+        place = {"orientation": exp.get("orientation", "parallel"),
+                 "position_mm": tuple(exp.get("position_mm", (0.0, middle_z)))}
+        if "approach" in exp:
+            place["approach"] = exp["approach"]
+        elif "incline_deg" in exp:
+            place["incline_deg"] = float(exp["incline_deg"])
+        elif "support" in info.get("regions", {}) and model.dim == 3:
+            place["approach"] = approach_down(info)
+        ind = make_indentor(str(exp["indentor"]), **place)
+        offsets = np.zeros((1, 3))
+        if "sweep" in exp:
+            axis, vals = parse_sweep(exp["sweep"])
+            offsets = np.zeros((len(vals), 3))
+            offsets[:, axis] = vals
+        if ("depth_mm" in exp) == ("force_N" in exp):
+            raise InputError(f"experiment '{name}': give depth_mm or force_N (one of them)")
+        if "depth_mm" in exp:
+            loads = [{"depth_mm": float(d)} for d in parse_values(exp["depth_mm"])]
+            deepest = max(d["depth_mm"] for d in loads)
+        else:
+            loads = [{"force_N": float(exp["force_N"]), "equal_force": bool(exp.get("equal_force", False)),
+                      "max_depth_mm": float(exp.get("max_depth_mm", MAX_DEPTH_MM))}]
+            deepest = loads[0]["max_depth_mm"]
+        touched |= reach(sn.x, ind, offsets, deepest)
+        plans.append((name, exp, place, ind, offsets, loads))
     rc = scene.get("receptors", {})
     line = rc.get("line")
     if line is not None:
@@ -701,33 +825,10 @@ def run_scene(model_dir, out_dir, scene: dict, progress: bool = True) -> str:
                          float(rc.get("spacing_mm", 1.0)), line)
     sampler = ReceptorSampler(model, grid)
     measures = list(rc.get("measures", DEFAULT_MEASURES))
+    system = factorise(model, info, sn.nodes[touched], progress)     # only what the scene can touch
     cm = ContactModel.from_fe(model, system, region, observe=sampler.operator)
-    up = info.get("regions", {}).get("support", {}).get("vertical_up")
-    middle_z = 0.5 * (sn.x[:, 2].min() + sn.x[:, 2].max()) if model.dim == 3 else 0.0
     runs, records = [], []
-    for k, exp in enumerate(scene["experiment"]):
-        name = str(exp.get("name", f"experiment{k + 1}"))
-        place = {"orientation": exp.get("orientation", "parallel"),
-                 "position_mm": tuple(exp.get("position_mm", (0.0, middle_z)))}
-        if "approach" in exp:
-            place["approach"] = exp["approach"]
-        elif "incline_deg" in exp:
-            place["incline_deg"] = float(exp["incline_deg"])
-        elif up is not None and model.dim == 3:
-            place["approach"] = -np.asarray(up, float)
-        ind = make_indentor(str(exp["indentor"]), **place)
-        offsets = np.zeros((1, 3))
-        if "sweep" in exp:
-            axis, vals = parse_sweep(exp["sweep"])
-            offsets = np.zeros((len(vals), 3))
-            offsets[:, axis] = vals
-        if ("depth_mm" in exp) == ("force_N" in exp):
-            raise InputError(f"experiment '{name}': give depth_mm or force_N (one of them)")
-        if "depth_mm" in exp:
-            loads = [{"depth_mm": float(d)} for d in parse_values(exp["depth_mm"])]
-        else:
-            loads = [{"force_N": float(exp["force_N"]), "equal_force": bool(exp.get("equal_force", False)),
-                      "max_depth_mm": float(exp.get("max_depth_mm", MAX_DEPTH_MM))}]
+    for name, exp, place, ind, offsets, loads in plans:
         t0 = time.perf_counter()
         steps = []
         for off in offsets:

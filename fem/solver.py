@@ -341,23 +341,34 @@ class LinearSystem:
         f = self._factor
         return (f.condensed_nodes, f.condensed_direction) if len(f.condensed) else (np.zeros(0, int), None)
 
-    def compliance(self, nodes, direction) -> np.ndarray:
-        """(k, k) exact compliance [mm/N] along the unit `direction` (dim,) between P2 nodes (k,):
-        a force f_j along it at node j moves node i by C_ij f_j along it. No solves: the inverse of
-        the stored Schur complement. Zero rows and columns for nodes held along the direction.
-        Raises ValueError unless the system condensed these nodes along +-direction."""
+    def _stored(self, nodes, direction):
+        """(positions of nodes in the condensed set (k,), condensed (k,) bool, held (k,) bool)."""
         nodes = np.asarray(nodes)
         have, along = self.condensed
         a = np.asarray(direction, float)[:self.model.dim]
         if along is None or abs(abs(a @ along) - 1) > 1e-12:
-            raise ValueError("this system stores no compliance along that direction: factorise with condense=")
+            return np.zeros(len(nodes), int), np.zeros(len(nodes), bool), np.zeros(len(nodes), bool)
         pos = np.minimum(np.searchsorted(have, nodes), max(len(have) - 1, 0))
-        inside = have[pos] == nodes
         dofs = self.model.node_dofs(nodes)
         axis = np.flatnonzero(np.abs(along) > 1 - 1e-12)
         held = (np.isin(dofs[:, axis[0]], self.fixed) if axis.size else np.isin(dofs, self.fixed).all(axis=1))
+        return pos, have[pos] == nodes, held
+
+    def stored(self, nodes, direction) -> np.ndarray:
+        """(k,) bool: which P2 nodes have a stored compliance along the unit `direction` (condensed
+        along +-direction, or held along it); all False when nothing is condensed along it."""
+        _, inside, held = self._stored(nodes, direction)
+        return inside | held
+
+    def compliance(self, nodes, direction) -> np.ndarray:
+        """(k, k) exact compliance [mm/N] along the unit `direction` (dim,) between P2 nodes (k,):
+        a force f_j along it at node j moves node i by C_ij f_j along it. No solves: the inverse of
+        the stored Schur complement. Zero rows and columns for nodes held along the direction.
+        Raises ValueError unless every node is `stored`."""
+        pos, inside, held = self._stored(nodes, direction)
         if not (inside | held).all():
-            raise ValueError(f"{int((~(inside | held)).sum())} nodes have no stored compliance: factorise with condense=")
+            raise ValueError(f"this system stores no compliance along {np.round(direction, 6).tolist()} for "
+                             f"{int((~(inside | held)).sum())} of the nodes: factorise with condense=")
         i = np.flatnonzero(inside)
         order = self._factor.condensed_order[pos[i]]
         block = self._factor.compliance_block()
@@ -598,25 +609,31 @@ class Model:
         """(ndof, ndof) deviatoric stiffness int 2 mu dev eps(u) : dev eps(v) [N/mm].
 
         Vectorised over elements (skfem's generic assembly is ~5x slower for this form): with
-        M[a,i,b,j] = int 2 mu dN_a/dx_i dN_b/dx_j, k[ai,bj] = d_ij sum_k M[akbk] / 2 + M[ajbi] / 2
-        - M[aibj] / d."""
-        d = self.dim
-        scalar = Basis(self.mesh, ElementTetP2() if d == 3 else ElementTriP2(), intorder=2)
-        G = np.array([scalar.basis[a][0].grad for a in range(scalar.Nbfun)])      # (nb, d, M, nqp)
-        nb, M = len(G), self.mesh.nelements
-        rows, cols, vals = [], [], []
-        for chunk in np.array_split(np.arange(M), max(1, M // 20000)):
-            g = G[:, :, chunk]
-            m = np.einsum("eq,aieq,bjeq->eaibj", 2 * self.mu[chunk, None] * scalar.dx[chunk], g, g)
-            tr = np.einsum("eakbk->eab", m)
-            k = (0.5 * tr[:, :, None, :, None] * np.eye(d)[None, None, :, None, :]
-                 + 0.5 * m.transpose(0, 1, 4, 3, 2) - m / d)
-            dofs = self.basis.element_dofs[:, chunk].T.astype(np.int32)               # (e, nb * d)
-            rows.append(np.repeat(dofs, nb * d, axis=1).ravel())
-            cols.append(np.tile(dofs, (1, nb * d)).ravel())
-            vals.append(k.reshape(len(chunk), -1))
-        return sp.csr_matrix((np.concatenate(vals).ravel(), (np.concatenate(rows), np.concatenate(cols))),
-                             shape=(self.ndof, self.ndof))
+        M[a,i,b,j] = int 2 mu dN_a/dx_i dN_b/dx_j (one batched X^T X per element), the block of
+        nodes a, b is k[i,j] = d_ij sum_k M[akbk] / 2 + M[ajbi] / 2 - M[aibj] / d. Blocks are
+        summed per node pair (bincount) into a 3x3-block matrix: 4 s instead of 8 s for 284k DOFs."""
+        d, b = self.dim, self.basis
+        nb, M, nn = b.Nbfun // d, self.mesh.nelements, self.ndof // d
+        G = np.array([b.basis[a * d][0].grad[0] for a in range(nb)])             # (nb, d, M, nqp)
+        X = np.ascontiguousarray((G * np.sqrt(2 * self.mu[:, None] * b.dx)).transpose(2, 0, 1, 3))
+        X = X.reshape(M, nb * d, -1)                                             # (M, nb d, nqp)
+        nodes = (b.element_dofs[::d].T // d).astype(np.int64)                   # (M, nb) P2 nodes
+        pairs, pos = np.unique((nodes[:, :, None] * nn + nodes[:, None, :]).reshape(M, -1), return_inverse=True)
+        pos = pos.reshape(M, -1)
+        data = np.zeros((d * d, len(pairs)))
+        for chunk in np.array_split(np.arange(M), max(1, M // 10000)):
+            m = np.matmul(X[chunk], X[chunk].transpose(0, 2, 1))
+            m = m.reshape(len(chunk), nb, d, nb, d).transpose(0, 2, 4, 1, 3)     # (e, i, j, a, b)
+            k = m * (-1.0 / d) + 0.5 * m.transpose(0, 2, 1, 3, 4)
+            half_trace = 0.5 * np.einsum("ekkab->eab", m)
+            for i in range(d):
+                k[:, i, i] += half_trace
+            k = np.ascontiguousarray(k.transpose(1, 2, 0, 3, 4)).reshape(d * d, -1)
+            p = pos[chunk].ravel()
+            for c in range(d * d):
+                data[c] += np.bincount(p, weights=k[c], minlength=len(pairs))
+        indptr = np.searchsorted(pairs // nn, np.arange(nn + 1))
+        return sp.bsr_matrix((data.T.reshape(-1, d, d), pairs % nn, indptr), shape=(self.ndof, self.ndof)).tocsr()
 
     @cached_property
     def K(self) -> LinearOperator:

@@ -145,3 +145,43 @@ def test_hertz_sphere_on_quarter_block():
     assert abs(math.sqrt(4 * res.contact_area_mm2 / math.pi) / a_of_F - 1) < 0.03
     assert abs(res.max_pressure_MPa / (3 * F / (2 * math.pi * a_of_F ** 2)) - 1) < 0.03
     assert 0 < F / hertz_sphere(5.0, 0.1, 1.0, nu)[0] - 1 < 0.1     # stiffer than the half-space
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_condensing_only_the_reach_gives_the_full_answer(dim):
+    """A system condensed on the candidates an indentation can reach (fem.contact.reach) gives the
+    same forces, deflections and gaps on every candidate (those outside the reach come with the
+    observation solve) and receptor strains as one condensed on all candidates; an indentor beyond
+    the reach is refused with a one-line error."""
+    from fem.contact import reach
+    from reconstruct.errors import InputError
+
+    if dim == 2:
+        model, _ = half_plane(0.48, fine_mm=0.05, size_mm=20.0)
+        prescribed, ind = {"bottom": 0.0, "sym": (0.0, None)}, make_indentor("C2", orientation="parallel")
+    else:
+        model, _ = quarter_block(0.48, 0.25, 4.0)
+        prescribed = {"bottom": 0.0, "symx": (0.0, None, None), "symz": (None, None, 0.0)}
+        ind = make_indentor("sphere:5")
+    sn = model.surface_nodes("top")
+    depths = [0.1, 0.2, 0.3]
+    near = reach(sn.x, ind, np.zeros((1, 3)), max(depths))
+    assert 3 < near.sum() < 0.8 * len(near)
+    receptors = model.strain_operator(sn.x[:7] - [0.0, 0.75, 0.0][:dim])
+    part = ContactModel.from_fe(model, model.system(prescribed, condense=(sn.nodes[near], ind.approach)), "top",
+                                observe=receptors)           # first: a cached superset would be reused
+    full = ContactModel.from_fe(model, model.system(prescribed, condense=(sn.nodes, ind.approach)), "top",
+                                observe=receptors)
+    assert not part.compliance(ind.approach).reach.all()
+    parts = part.indent_depths(ind, depths)
+    assert all(b._unseen is not None for b in parts)         # outside the reach: not known yet
+    for a, b in zip(full.indent_depths(ind, depths), parts):
+        assert np.array_equal(a.active, b.active) and not b.active[~near].any()
+        for x, y in [(a.force_N, b.force_N), (a.deflection_mm, b.deflection_mm), (a.observed, b.observed)]:
+            assert np.abs(x - y).max() < 1e-9 * np.abs(x).max()
+        finite = np.isfinite(a.gap_mm)
+        assert np.array_equal(finite, np.isfinite(b.gap_mm))
+        assert np.abs(a.gap_mm[finite] - b.gap_mm[finite]).max() < 1e-9
+    wide = make_indentor("C8" if dim == 2 else "sphere:20")
+    with pytest.raises(InputError, match="outside the candidates condensed"):
+        part.indent(wide, depth_mm=0.6)
