@@ -462,12 +462,7 @@ class ContactModel:
 
     def first_touch_mm(self, indentor) -> np.ndarray:
         """(n_parts,) travel at which each part first touches the undeformed candidate surface."""
-        s = indentor.part_standoff(self.points_mm)
-        t0 = s.min(axis=0)
-        if not np.all(np.isfinite(t0)):
-            raise InputError(f"indentor {indentor.name} at {np.round(indentor.origin_mm, 3).tolist()} mm "
-                             f"never touches the finger surface: move it over the pad or change the approach")
-        return t0
+        return first_touch(self.points_mm, indentor)[1]
 
     def solve_travel(self, indentor, travel_mm, warm=None) -> tuple[ContactResult, LCPSolution, np.ndarray]:
         """Contact at given tip travels (n_parts,) mm. Returns (result, lcp, candidate subset)."""
@@ -758,14 +753,30 @@ def reach(points_mm, indentor, offsets_mm, depth_mm: float, margin_mm: float = R
     and pushed up to depth_mm beyond each part's first touch, overlaps in the undeformed state
     (within margin_mm). Only these can carry force: on the fingertip models (monkey, cylinders
     C1-C8, bar, sphere, wedge, step, punch to 3 mm) no node outside the undeformed overlap touched
-    (the skin around an indentor moves away from it), and ContactModel checks it on every result."""
+    (the skin around an indentor moves away from it), and ContactModel checks it on every result.
+    Raises InputError when the indentor at some offset never touches the candidates."""
     mask = np.zeros(len(points_mm), bool)
-    for off in np.atleast_2d(offsets_mm):
-        s = indentor.shifted(off).part_standoff(points_mm)                      # (m, parts)
-        t0 = s.min(axis=0)
-        with np.errstate(invalid="ignore"):
-            mask |= np.any(s - t0 <= depth_mm + margin_mm, axis=1)
+    offsets_mm = np.atleast_2d(offsets_mm)
+    for off in offsets_mm:
+        try:
+            s, t0 = first_touch(points_mm, indentor.shifted(off))
+        except InputError as exc:
+            raise InputError(f"sweep position {np.round(off, 4).tolist()} mm: {exc}" if len(offsets_mm) > 1
+                             else str(exc)) from None
+        mask |= np.any(s - t0 <= depth_mm + margin_mm, axis=1)
     return mask
+
+
+def first_touch(points_mm, indentor) -> tuple[np.ndarray, np.ndarray]:
+    """(standoff (m, n_parts) mm of each candidate point (m, dim) from each part along the approach,
+    inf where it misses; (n_parts,) travel at which each part first touches). Raises InputError
+    when a part touches none of them."""
+    s = indentor.part_standoff(points_mm)
+    t0 = s.min(axis=0)
+    if not np.all(np.isfinite(t0)):
+        raise InputError(f"indentor {indentor.name} at {np.round(indentor.origin_mm, 3).tolist()} mm "
+                         f"never touches the finger surface: move it over the pad or change the approach")
+    return s, t0
 
 
 def run_scene(model_dir, out_dir, scene: dict, progress: bool = True) -> str:
