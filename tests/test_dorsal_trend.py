@@ -1,27 +1,60 @@
-"""Thesis 6.2.1 trend on a coarse 3D human fingertip (1 mm volar elements): under a 2 mm line load
-the entire dorsal half moves vertically less than 10 % of the maximum. It holds because the
-proximal cut is held (fem.contact.open_model); with that cut free this model gives 10.6 % (0.5 mm
-model 11.5 %), the largest motion on the free proximal cut, against the thesis's statement that
-deformation fades faster proximally than distally."""
+"""Thesis 6.2.1 trend on coarse 3D fingertips (1 mm volar elements): under a 2 mm line load the
+entire dorsal half moves vertically less than 10 % of the maximum. Dorsal half: the outer surface
+below the section centroid (as in benchmarks/contact_bench.py dorsal).
+
+Human preset: it holds because the proximal cut is held (fem.contact.open_model); with that cut
+free this model gives 10.6 % (0.5 mm model 11.5 %), the largest motion on the free proximal cut,
+against the thesis's statement that deformation fades faster proximally than distally.
+
+Monkey preset: it does not hold (README, Boundary conditions): 11-14 % on the lateral flank next
+to the load. The preset is the human one at half scale with the same 1.5 mm skin, so 2 mm is as
+deep relative to its 3.5 mm volar half-height as 4 mm on the human; at 1 mm, the human's 2 mm
+relative to the section, it holds. The test pins both so that a change to either is noticed."""
 import numpy as np
 import pytest
 
 import pipeline
 from fem.contact import ContactModel, open_model
 from fem.indentors import make_indentor
+from fem.model import model_from_args, params_for
 
 
-@pytest.mark.slow
-def test_dorsal_half_moves_less_than_10_percent_under_a_2_mm_line_load(tmp_path):
-    out = tmp_path / "human"
-    assert pipeline.main(["mesh", "--preset", "human", "--size", "1.0", "--out", str(out), "--quiet"]) == 0
+def _dorsal_ratios(tmp_path, preset, depths_mm):
+    """Per depth: (largest |u_y| on the outer surface below the section centroid, largest |u_y|
+    over all nodes with y < 0, largest on the proximal cut, on the distal cut), each over the
+    largest |u_y|, for the wedge perpendicular to the axis at the middle of the pad."""
+    out = tmp_path / preset
+    assert pipeline.main(["mesh", "--preset", preset, "--size", "1.0", "--out", str(out), "--quiet"]) == 0
     model, system, region, _ = open_model(out)
     cm = ContactModel.from_fe(model, system, region)
     z = cm.points_mm[:, 2]
     wedge = make_indentor("wedge", orientation="perpendicular", position_mm=(0.0, 0.5 * (z.min() + z.max())))
-    res = cm.indent(wedge, depth_mm=2.0)
-    uy = np.abs(cm.compliance(wedge.approach).displacement(res.force_N).reshape(-1, 3)[:, 1])
-    assert uy.max() == pytest.approx(2.0, rel=1e-6)             # the wedge's depth
-    ratio = uy[model.nodes[:, 1] < 0].max() / uy.max()
-    assert 0.03 < ratio < 0.10, ratio                           # measured 7.2 %
-    assert uy[model.region_nodes("proximal")].max() < uy[model.region_nodes("distal")].max()
+    sections = model_from_args(None, preset, params_for(preset))
+    x, mesh = model.nodes, model.mesh
+    bf = mesh.boundary_facets()
+    surface = np.union1d(np.unique(mesh.facets[:, bf]), mesh.nvertices + np.unique(mesh.f2e[:, bf]))
+    dorsal = surface[x[surface, 1] < np.interp(x[surface, 2], sections.z_mm, sections.centroids[:, 1])]
+    rows = []
+    for depth in depths_mm:
+        res = cm.indent(wedge, depth_mm=depth)
+        uy = np.abs(cm.compliance(wedge.approach).displacement(res.force_N).reshape(-1, 3)[:, 1])
+        assert uy.max() == pytest.approx(depth, rel=1e-6)       # the wedge's depth
+        rows.append([uy[nodes].max() / uy.max() for nodes in
+                     (dorsal, x[:, 1] < 0, model.region_nodes("proximal"), model.region_nodes("distal"))])
+    return rows
+
+
+@pytest.mark.slow
+def test_dorsal_half_moves_less_than_10_percent_under_a_2_mm_line_load(tmp_path):
+    [(surface, below_axis, proximal, distal)] = _dorsal_ratios(tmp_path, "human", [2.0])
+    assert 0.03 < surface < 0.10, surface                      # measured 7.2 %
+    assert 0.03 < below_axis < 0.10, below_axis                # measured 7.2 %
+    assert proximal < distal
+
+
+@pytest.mark.slow
+def test_monkey_dorsal_half_is_under_10_percent_at_1_mm_but_not_at_2_mm(tmp_path):
+    (surface2, _, proximal, distal), (surface1, _, _, _) = _dorsal_ratios(tmp_path, "monkey", [2.0, 1.0])
+    assert 0.10 < surface2 < 0.17, surface2                    # measured 11.8-13.6 % (1.0 mm meshes)
+    assert 0.03 < surface1 < 0.10, surface1                    # measured 6.1 %
+    assert proximal < distal
