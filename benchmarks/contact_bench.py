@@ -29,7 +29,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from fem.contact import CONTACT_REGION, MAX_DEPTH_MM, ContactModel, factorise, reach, read_model  # noqa: E402
+from fem.contact import (CONTACT_REGION, MAX_DEPTH_MM, ContactModel, factorise, reach, read_model,  # noqa: E402
+                         receptor_surface)
 from fem.indentors import make_indentor  # noqa: E402
 from fem.receptors import ReceptorSampler, receptor_grid  # noqa: E402
 
@@ -51,7 +52,7 @@ def _setup(model_dir, middle_line=False, plan=None):
         touched = sn.nodes[reach(sn.x, _middle(indentor, sn.x), offsets, deepest)]
     system = factorise(model, info, touched)
     line = (2, 0.5 * (sn.x[:, 2].min() + sn.x[:, 2].max())) if middle_line and model.dim == 3 else None
-    grid = receptor_grid(sn.x, sn.normal, (0.5, 0.75, 1.0), 1.0 if model.dim == 3 else 0.5, line)
+    grid = receptor_grid(*receptor_surface(model, sn), (0.5, 0.75, 1.0), 1.0 if model.dim == 3 else 0.5, line)
     sampler = ReceptorSampler(model, grid)
     cm = ContactModel.from_fe(model, system, region, observe=sampler.operator)
     return model, system, region, sampler, cm, time.perf_counter() - t

@@ -770,6 +770,16 @@ def reach(points_mm, indentor, offsets_mm, depth_mm: float, margin_mm: float = R
     return mask
 
 
+def receptor_surface(model, sn) -> tuple[np.ndarray, np.ndarray]:
+    """(positions (k, dim) mm, outward normals (k, dim)) of the contact-region nodes `sn` that may
+    carry receptor sites: all but those on a 3D end cut. Below a node on the rim of a cut the
+    receptors lie on the cut plane, which the mesh reproduces only within pytetwild's envelope
+    (0.02 mm): with a 0.05 mm envelope one fell outside the mesh."""
+    ends = [model.region_nodes(r) for r in ("proximal", "distal") if r in model.regions]
+    keep = ~np.isin(sn.nodes, np.concatenate(ends)) if ends else np.ones(len(sn.nodes), bool)
+    return sn.x[keep], sn.normal[keep]
+
+
 def first_touch(points_mm, indentor) -> tuple[np.ndarray, np.ndarray]:
     """(standoff (m, n_parts) mm of each candidate point (m, dim) from each part along the approach,
     inf where it misses; (n_parts,) travel at which each part first touches). Raises InputError
@@ -835,7 +845,8 @@ def run_scene(model_dir, out_dir, scene: dict, progress: bool = True) -> str:
         if axis is None or axis >= model.dim:
             raise InputError(f"bad receptor line {line}: use z=<mm> or z=middle (3D), x=<mm>")
         line = (axis, value)
-    grid = receptor_grid(sn.x, sn.normal, parse_values(rc.get("depths_mm", list(DEFAULT_DEPTHS_MM))),
+    x, normal = receptor_surface(model, sn)
+    grid = receptor_grid(x, normal, parse_values(rc.get("depths_mm", list(DEFAULT_DEPTHS_MM))),
                          float(rc.get("spacing_mm", 1.0)), line)
     sampler = ReceptorSampler(model, grid)
     measures = list(rc.get("measures", DEFAULT_MEASURES))

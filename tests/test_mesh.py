@@ -192,3 +192,22 @@ def test_monkey_size_sections_json_meshes_with_size_defaults(built, tmp_path, mo
     assert info["size_defaults"]["middle_width_mm"] == pytest.approx(8.56, abs=0.01)
     with pytest.raises(InputError, match="bone"):
         model_from_args(str(src), None, params_for(None, bone_offset_mm=1.0))
+
+
+def test_receptor_sites_skip_the_end_cuts(built):
+    """Receptor sites come from the volar nodes off the end cuts (fem.contact.receptor_surface), so
+    every receptor point lies in the mesh, at least a node spacing inside the cut planes."""
+    from fem.contact import read_model, receptor_surface
+    from fem.receptors import ReceptorSampler, receptor_grid
+
+    model, _ = read_model(built[0])
+    sn = model.surface_nodes("volar")
+    x, normal = receptor_surface(model, sn)
+    z0, z1 = sn.x[:, 2].min(), sn.x[:, 2].max()
+    on_cut = (sn.x[:, 2] < z0 + 0.02) | (sn.x[:, 2] > z1 - 0.02)       # the cut planes, within the envelope
+    assert on_cut.sum() > 20 and len(x) == len(sn.x) - on_cut.sum()
+    assert x[:, 2].min() > z0 + 0.1 and x[:, 2].max() < z1 - 0.1
+    grid = receptor_grid(x, normal, depths_mm=(0.5, 0.75, 1.0), spacing_mm=1.0)
+    z = grid.points_mm[:, 2]
+    assert z.min() > z0 + 0.1 and z.max() < z1 - 0.1
+    assert ReceptorSampler(model, grid).operator.shape[0] > 0         # every point located in the mesh
