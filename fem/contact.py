@@ -689,10 +689,14 @@ def _check_keys(table, allowed, where):
 # The proximal cut is where the distal phalanx joins the rest of the finger, which the experiments
 # hold still (thesis 2.2.2: hand restrained, no joint moves; 6.2.1: the ends' boundary conditions
 # differ markedly and deformation fades faster proximally). Left free, the cut swung by 12.5 % of a
-# 2 mm line load on the human preset (README "Indentation").
-HELD = {3: {"nail": 0.0, "support": (None, 0.0, None), "proximal": 0.0}, 2: {"fixed": 0.0}}
-"""Constraints of a model folder per dimension: 3D nail and proximal cut fixed, support held along
-its normal; 2D `fixed` held (`held_regions` skips regions a mesh lacks, e.g. older meshes)."""
+# 2 mm line load on the human preset (README "Indentation"). Only its core is held (layers 3-5,
+# `proximal_core`): the skin goes on proximally, so indentors as long as the finger (bars and
+# wedges along the axis, steps, large cylinders) press the cut's skin instead of a fixed rim.
+HELD = {3: {"nail": 0.0, "support": (None, 0.0, None), "proximal_core": 0.0}, 2: {"fixed": 0.0}}
+"""Constraints of a model folder per dimension: 3D nail and the proximal cut's core fixed, support
+held along its normal; 2D `fixed` held (`held_regions` skips regions a mesh lacks)."""
+SKIN_LAYERS = (1, 2)
+"""Epidermis and dermis: their vertices on the proximal cut are not held (`held_regions`)."""
 CONTACT_REGION = {3: "volar", 2: "surface"}
 """Contact candidate region of a model folder per dimension."""
 
@@ -714,7 +718,12 @@ def read_model(model_dir, material=None, nu=None):
 
 
 def held_regions(model) -> dict:
-    """`HELD` for the model's dimension, restricted to the regions its mesh has."""
+    """`HELD` for the model's dimension, restricted to the regions its mesh has. Adds the region
+    `proximal_core` to a 3D model with a `proximal` cut: the cut's vertices outside the skin."""
+    if "proximal" in model.regions and "proximal_core" not in model.regions:
+        skin = np.zeros(model.mesh.nvertices, bool)
+        skin[model.mesh.t[:, np.isin(model.layer, SKIN_LAYERS)].ravel()] = True
+        model.regions["proximal_core"] = model.regions["proximal"] & ~skin
     return {k: v for k, v in HELD[model.dim].items() if k in model.regions}
 
 

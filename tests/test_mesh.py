@@ -211,3 +211,20 @@ def test_receptor_sites_skip_the_end_cuts(built):
     z = grid.points_mm[:, 2]
     assert z.min() > z0 + 0.1 and z.max() < z1 - 0.1
     assert ReceptorSampler(model, grid).operator.shape[0] > 0         # every point located in the mesh
+
+
+def test_bar_along_the_axis_presses_the_skin_of_the_proximal_cut(built, tmp_path):
+    """Only the proximal cut's core (layers 3-5) is held, so a bar as long as the finger indents
+    the cut's skin instead of stopping at a fixed rim (it did while the whole cut was held)."""
+    from fem.contact import held_regions, read_model
+
+    model, _ = read_model(built[0])
+    assert "proximal_core" in held_regions(model) and "proximal" not in held_regions(model)
+    core, cut = model.regions["proximal_core"], model.regions["proximal"]
+    skin_vertices = np.unique(model.mesh.t[:, model.layer <= 2])
+    assert core.sum() > 10 and not core[skin_vertices].any() and cut[skin_vertices].sum() > 10
+    out = tmp_path / "bar"
+    assert pipeline.main(["indent", str(built[0]), "--indentor", "bar:0.5", "--axis", "parallel",
+                          "--depth", "1", "--out", str(out), "--quiet"]) == 0
+    rows = (out / "bar_0.5.csv").read_text().splitlines()
+    assert float(rows[-1].split(",")[4]) > 0                 # force_N at 1 mm
