@@ -60,8 +60,9 @@ def _setup(model_dir, middle_line=False, plan=None):
 
 def _middle(indentor, points_mm):
     """3D: the indentor moved along z to the middle of the candidates (m, 3); 2D: as is."""
-    z = points_mm[:, -1]
-    return indentor.shifted([0.0, 0.0, 0.5 * (z.min() + z.max())]) if points_mm.shape[1] == 3 else indentor
+    if points_mm.shape[1] != 3:
+        return indentor
+    return indentor.shifted([0.0, 0.0, 0.5 * (points_mm[:, 2].min() + points_mm[:, 2].max())])
 
 
 def _check(model, system, region, sampler, indentor, result, load):

@@ -824,7 +824,7 @@ def run_scene(model_dir, out_dir, scene: dict, progress: bool = True) -> str:
             place["approach"] = exp["approach"]
         elif "incline_deg" in exp:
             place["incline_deg"] = float(exp["incline_deg"])
-        elif "support" in info.get("regions", {}) and model.dim == 3:
+        elif model.dim == 3:
             place["approach"] = approach_down(info)
         ind = make_indentor(str(exp["indentor"]), **place)
         offsets = np.zeros((1, 3))

@@ -240,7 +240,8 @@ class LayeredModel:
                             "vertical_up": [0.0, float(np.cos(a)), 0.0 - float(np.sin(a))]},
                 "volar": {"span_deg": p.volar_span_deg, "centre": [0, 1], "z_frac": [0.0, 1.0]},
                 "proximal": {"what": "flat proximal cut (end cap at z0), where the finger goes on",
-                             "fixed": "all displacements (fem.contact.open_model: the hand is held)"},
+                             "fixed": "its core (layers 3-5), all displacements (fem.contact.HELD: the hand "
+                                      "is held; the skin goes on)"},
                 "distal": {"what": "flat distal cut where the rounded tip starts (end cap at z1), free"},
             },
         }

@@ -182,6 +182,7 @@ class _Pardiso:
         except Exception:  # noqa: BLE001  (interpreter shutdown, failed factorisation)
             pass
 
+
 class _Factor:
     """Factorised constrained system, reused for many right-hand sides.
 
