@@ -141,6 +141,10 @@ def _add_mesh(sub):
     p.add_argument("--tip-width-frac", type=float, default=0.9,
                    help="sections.json: end the model distally where the section width drops below this "
                         "fraction of the widest (the rounded tip is not modelled; default 0.9)")
+    p.add_argument("--tip", default="flat",
+                   help="distal end: flat (a cut, as the thesis; default), rounded (every layer wraps round a "
+                        "dome as long as the data's tip: the preset's cap, the sections beyond the body), or "
+                        "the dome length in mm")
     p.add_argument("--force", action="store_true", help="rebuild the mesh, ignoring the cache")
     p.add_argument("--quiet", action="store_true", help="no progress and no summary")
     p.set_defaults(run=_run_mesh)

@@ -801,6 +801,22 @@ def first_touch(points_mm, indentor) -> tuple[np.ndarray, np.ndarray]:
     return s, t0
 
 
+def scene_position(position, points, place) -> tuple:
+    """A scene's position_mm: (x, z) or (x, y, z) mm as given, or "top": the contact-region point
+    (P, dim) highest against the approach, where a plate would touch first (e.g. the pad of a
+    finger on an inclined support)."""
+    if isinstance(position, str) and position != "top":
+        raise InputError(f'position_mm "{position}": give [x, z] in mm or "top"')
+    if position != "top":
+        return tuple(position)
+    from fem.indentors import approach_direction
+
+    a = place.get("approach")
+    a = approach_direction(place.get("incline_deg", 0.0)) if a is None else np.asarray(a, float)
+    p = points[np.argmax(points @ -a[:points.shape[1]])]
+    return tuple(float(v) for v in p) if len(p) == 3 else (float(p[0]), 0.0)
+
+
 def run_scene(model_dir, out_dir, scene: dict, progress: bool = True) -> str:
     """Run every [[experiment]] of a scene on a model folder; write CSV, PNG (and PVD) atomically
     into out_dir. Returns a text summary."""
@@ -818,14 +834,14 @@ def run_scene(model_dir, out_dir, scene: dict, progress: bool = True) -> str:
     plans, touched = [], np.zeros(len(sn.nodes), bool)
     for k, exp in enumerate(scene["experiment"]):
         name = str(exp.get("name", f"experiment{k + 1}"))
-        place = {"orientation": exp.get("orientation", "parallel"),
-                 "position_mm": tuple(exp.get("position_mm", (0.0, middle_z)))}
+        place = {"orientation": exp.get("orientation", "parallel")}
         if "approach" in exp:
             place["approach"] = exp["approach"]
         elif "incline_deg" in exp:
             place["incline_deg"] = float(exp["incline_deg"])
         elif model.dim == 3:
             place["approach"] = approach_down(info)
+        place["position_mm"] = scene_position(exp.get("position_mm", (0.0, middle_z)), sn.x, place)
         ind = make_indentor(str(exp["indentor"]), **place)
         offsets = np.zeros((1, 3))
         if "sweep" in exp:

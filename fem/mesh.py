@@ -162,13 +162,17 @@ def boundary_faces(tets: np.ndarray) -> np.ndarray:
 
 
 def region_tags(model: LayeredModel, points: np.ndarray, tets: np.ndarray) -> dict:
-    """Region flags (P,) uint8 on boundary vertices: nail, support, volar on the outer lateral
-    surface (boundary faces not on an end cap); proximal, distal on the flat end caps."""
+    """Region flags (P,) uint8 on boundary vertices: nail, support, volar on the outer surface
+    (boundary faces not on a flat end cap; a rounded tip counts as the distal end of the length);
+    proximal, and distal unless the tip is rounded, on the flat end caps."""
     p = model.params
     bf = boundary_faces(tets)
     tri = points[bf]
     n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     lateral = np.abs(n[:, 2]) < 0.7 * np.linalg.norm(n, axis=1)
+    cap_z = tri[:, :, 2].mean(axis=1)
+    proximal = ~lateral & (cap_z < model.z_mm[0] + 0.1)
+    distal = ~lateral & (cap_z > model.z_mm[-1] - 0.1) & (not model.rounded)
     theta, _, _ = model.polar(points)
     zf = model.z_frac(points[:, 2])
     tol = 1e-6
@@ -178,19 +182,20 @@ def region_tags(model: LayeredModel, points: np.ndarray, tets: np.ndarray) -> di
         flag[faces.ravel()] = True
         return flag
 
-    on_surface = on(bf[lateral])
+    on_surface = on(bf[~(proximal | distal)])
 
     def region(centre, span_deg, z_frac):
         inside = angle_from(theta, centre) <= np.deg2rad(span_deg) / 2
         inside &= (zf >= z_frac[0] - tol) & (zf <= z_frac[1] + tol)
         return (on_surface & inside).astype(np.uint8)
 
-    cap_z = tri[:, :, 2].mean(axis=1)
-    return {"nail": region(-np.pi / 2, p.nail_span_deg, p.nail_z_frac),
+    tags = {"nail": region(-np.pi / 2, p.nail_span_deg, p.nail_z_frac),
             "support": region(-np.pi / 2, p.support_span_deg, p.support_z_frac),
             "volar": region(np.pi / 2, p.volar_span_deg, (0.0, 1.0)),
-            "proximal": on(bf[~lateral & (cap_z < model.z_mm[0] + 0.1)]).astype(np.uint8),
-            "distal": on(bf[~lateral & (cap_z > model.z_mm[-1] - 0.1)]).astype(np.uint8)}
+            "proximal": on(bf[proximal]).astype(np.uint8)}
+    if not model.rounded:
+        tags["distal"] = on(bf[distal]).astype(np.uint8)
+    return tags
 
 
 # ---------------------------------------------------------------------- checks
@@ -305,13 +310,15 @@ def cache_dir() -> Path:
 
 
 def mesh_key(model: LayeredModel, sizing: Sizing) -> str:
-    """sha256 of everything the tets depend on: the layer surfaces (rings, z), sizing, mesher.
+    """sha256 of everything the tets depend on: the layer surfaces (rings, z, tip), sizing, mesher.
     Region parameters are left out: they change the tags, not the tets."""
     import pytetwild
 
     h = hashlib.sha256()
     h.update(np.ascontiguousarray(model.rings).tobytes())
     h.update(np.ascontiguousarray(model.z_mm).tobytes())
+    if model.rounded:
+        h.update(json.dumps([model.derived["tip_lengths_mm"], model.derived["tip_levels"]]).encode())
     h.update(json.dumps([MESHER_VERSION, asdict(sizing), pytetwild.__version__],
                         sort_keys=True, default=str).encode())
     return h.hexdigest()

@@ -1,6 +1,8 @@
 """`pipeline.py mesh`: turn parsed options into model/sizing parameters, mesh, write, summarise."""
 from __future__ import annotations
 
+from dataclasses import replace
+
 from fem.model import PRESET_PARAMS, model_from_args, params_for
 from reconstruct.errors import InputError
 
@@ -23,12 +25,23 @@ def parse_profile(text: str | None):
 def model_params(args):
     """ModelParams from the CLI options (preset defaults for what is not given)."""
     preset = args.preset if args.preset in PRESET_PARAMS else None
-    return params_for(preset, epidermis_mm=args.epidermis, dermis_mm=args.dermis, layer3_mm=args.layer3,
-                      layer3_scale=args.layer3_scale,
-                      bone_diameter_mm=args.bone_diameter, bone_profile=parse_profile(args.bone_profile),
-                      bone_offset_mm=args.bone_offset, nail_span_deg=args.nail_span,
-                      nail_z_frac=_tuple(args.nail_z), support_span_deg=args.support_span,
-                      support_z_frac=_tuple(args.support_z), support_incline_deg=args.support_incline)
+    params = params_for(preset, epidermis_mm=args.epidermis, dermis_mm=args.dermis, layer3_mm=args.layer3,
+                        layer3_scale=args.layer3_scale,
+                        bone_diameter_mm=args.bone_diameter, bone_profile=parse_profile(args.bone_profile),
+                        bone_offset_mm=args.bone_offset, nail_span_deg=args.nail_span,
+                        nail_z_frac=_tuple(args.nail_z), support_span_deg=args.support_span,
+                        support_z_frac=_tuple(args.support_z), support_incline_deg=args.support_incline)
+    return replace(params, tip_mm=parse_tip(args.tip))      # None (rounded, the data's length) is a value
+
+
+def parse_tip(text: str):
+    """--tip: 'flat' -> 0.0, 'rounded' -> None (the data's length), a number -> that length in mm."""
+    if text in ("flat", "rounded"):
+        return 0.0 if text == "flat" else None
+    try:
+        return float(text)
+    except ValueError:
+        raise InputError(f"--tip '{text}': use flat, rounded or a length in mm, e.g. --tip 6.5") from None
 
 
 def _tuple(v):

@@ -11,7 +11,12 @@ Every axial section is resampled on N rays from its centroid (same angles in eve
 Offsets are exact erosions of the convex section (half-planes moved inwards), so the skin has the
 given thickness all round. Rings 0-3 share their rays; the bone is a homothetic copy of ring 0
 whose centre lies inside the bone, so corresponding ring points never cross. Layers are straight
-prisms between sections with flat end caps (the thesis did not model the hemispherical tip).
+prisms between sections with a flat proximal cap. Distally they end in a flat cap too (the thesis
+did not model the hemispherical tip), or, with tip_mm > 0, each shell closes in a dome: its last
+ring scaled by cos(phi) about its centre at z1 + h sin(phi), phi in [0, pi/2]. The outer dome is
+tip_mm long; the skin shells are shorter by their depth, ring 3's and the bone's by their scale
+factors, so every layer wraps round the tip with its own thickness (thesis 6.1: "the various
+layers of the skin could be wrapped around the bone at the distal end").
 """
 from __future__ import annotations
 
@@ -65,6 +70,9 @@ class ModelParams:
         platform); the support normal in the finger frame is +y (the finger lies on it), and
         `vertical_up` in model.json is +y turned by this angle about x (distal end lower).
     n_theta: rays per section.
+    tip_mm: length (mm) of the rounded distal tip beyond the last section; 0: a flat distal cut (the
+        thesis's model); None: the length of the data (`model_from_args`: the preset's cap, or the
+        sections beyond the body).
     """
 
     epidermis_mm: float = 0.5
@@ -81,6 +89,7 @@ class ModelParams:
     support_incline_deg: float = 0.0
     volar_span_deg: float = 180.0
     n_theta: int = 64
+    tip_mm: float | None = 0.0
 
     def check(self) -> None:
         """Raise InputError for impossible values."""
@@ -100,6 +109,8 @@ class ModelParams:
                 raise InputError(f"{name} must be two fractions 0 <= lo < hi <= 1; got {lo} {hi}")
         if not -90 < self.support_incline_deg < 90:
             raise InputError(f"support_incline_deg must be in (-90, 90); got {self.support_incline_deg}")
+        if self.tip_mm is not None and self.tip_mm < 0:
+            raise InputError(f"tip_mm must be >= 0 (0: flat distal cut); got {self.tip_mm}")
         if self.n_theta < 16:
             raise InputError(f"n_theta must be >= 16; got {self.n_theta}")
         if self.bone_profile is not None:
@@ -126,21 +137,55 @@ class LayeredModel:
     derived: dict = field(default_factory=dict)
 
     # ------------------------------------------------------------------ surfaces
+    @property
+    def rounded(self) -> bool:
+        """True if the shells close in domes distally (tip_mm > 0), False for a flat distal cut."""
+        return "tip_lengths_mm" in self.derived
+
+    def _flat_ends(self) -> tuple:
+        """Sections closed by a flat cap: the proximal one, and the distal one unless rounded."""
+        return (0,) if self.rounded else (0, len(self.z_mm) - 1)
+
     def _vertex_index(self):
+        """Vertex ids: rings (K, 5, N); flat cap centres (1 or 2,); dome levels (5, M-1, N) and
+        apexes (5,), both None for a flat distal cut."""
         K, _, N, _ = self.rings.shape
-        ring_id = np.arange(K * N_LAYERS * N).reshape(K, N_LAYERS, N)
-        centres = K * N_LAYERS * N + np.arange(2)      # bone cap centres, proximal and distal
-        return ring_id, centres
+        n = K * N_LAYERS * N
+        ring_id = np.arange(n).reshape(K, N_LAYERS, N)
+        centres = n + np.arange(len(self._flat_ends()))
+        if not self.rounded:
+            return ring_id, centres, None, None
+        n += len(centres)
+        M = self.derived["tip_levels"]
+        levels = n + np.arange(N_LAYERS * (M - 1) * N).reshape(N_LAYERS, M - 1, N)
+        return ring_id, centres, levels, n + levels.size + np.arange(N_LAYERS)
+
+    def _domes(self):
+        """Distal domes: level rings (5, M-1, N, 3) and apexes (5, 3), mm. Shell i's last ring is
+        scaled by cos(phi) about its centre (centroid; bone: bone centre) at z1 + h_i sin(phi)."""
+        h = np.asarray(self.derived["tip_lengths_mm"])
+        M = self.derived["tip_levels"]
+        phi = 0.5 * np.pi * np.arange(1, M) / M
+        K = len(self.z_mm)
+        centre = np.vstack([np.tile(self.centroids[-1], (N_LAYERS - 1, 1)), self.bone_centre(K - 1)])
+        rel = self.rings[-1] - centre[:, None]                                     # (5, N, 2)
+        xy = centre[:, None, None] + np.cos(phi)[None, :, None, None] * rel[:, None]
+        z = self.z_mm[-1] + h[:, None] * np.sin(phi)[None]                         # (5, M-1)
+        levels = np.concatenate([xy, np.broadcast_to(z[:, :, None, None], xy.shape[:3] + (1,))], axis=-1)
+        return levels, np.column_stack([centre, self.z_mm[-1] + h])
 
     def vertices(self) -> np.ndarray:
-        """(K*5*N + 2, 3) vertices of all rings, then the two bone-cap centres."""
+        """(V, 3) vertices: all rings, the bone-cap centres of the flat ends, then the dome levels
+        and apexes of a rounded tip (ids as `_vertex_index`)."""
         K, _, N, _ = self.rings.shape
         xyz = np.concatenate([self.rings, np.broadcast_to(self.z_mm[:, None, None, None],
                                                           (K, N_LAYERS, N, 1))], axis=-1)
-        ends = []
-        for k in (0, K - 1):
-            ends.append([*self.bone_centre(k), self.z_mm[k]])
-        return np.vstack([xyz.reshape(-1, 3), np.array(ends)])
+        ends = np.array([[*self.bone_centre(k), self.z_mm[k]] for k in self._flat_ends()])
+        out = [xyz.reshape(-1, 3), ends]
+        if self.rounded:
+            levels, apex = self._domes()
+            out += [levels.reshape(-1, 3), apex]
+        return np.vstack(out)
 
     def bone_centre(self, k: int) -> np.ndarray:
         """Centre of the homothety that maps ring 0 to the bone in section k (inside the bone)."""
@@ -149,18 +194,20 @@ class LayeredModel:
 
     def faces(self, ring: int | None = None) -> np.ndarray:
         """Outward triangles (M, 3). ring=None: the merged input of all shells (each face once);
-        ring=i: the closed shell bounding layers i+1..5 (ring i's tube plus its end caps)."""
+        ring=i: the closed shell bounding layers i+1..5 (ring i's tube, its end caps or dome)."""
         K, _, N, _ = self.rings.shape
-        ids, centres = self._vertex_index()
+        ids, centres, levels, apex = self._vertex_index()
         j, j1 = np.arange(N), (np.arange(N) + 1) % N
+
+        def strips(lo, hi):
+            """Triangles between consecutive rings lo, hi (..., N) of ids, outward as the tubes."""
+            a, b, c, d = lo[..., j], lo[..., j1], hi[..., j1], hi[..., j]
+            return np.vstack([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)])
+
         rings = range(N_LAYERS) if ring is None else [ring]
-        out = []
-        for i in rings:                                   # lateral tubes
-            a, b = ids[:-1, i][:, j], ids[:-1, i][:, j1]
-            c, d = ids[1:, i][:, j1], ids[1:, i][:, j]
-            out += [np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)]
+        out = [strips(ids[:-1, i], ids[1:, i]) for i in rings]                     # lateral tubes
         first = 0 if ring is None else ring
-        for k, centre, flip in ((0, centres[0], True), (K - 1, centres[1], False)):
+        for k, centre in zip(self._flat_ends(), centres):
             cap = []
             for i in range(first, N_LAYERS - 1):          # annuli between rings i and i+1
                 o, o1, n, n1 = ids[k, i, j], ids[k, i, j1], ids[k, i + 1, j], ids[k, i + 1, j1]
@@ -168,7 +215,11 @@ class LayeredModel:
             bone = ids[k, N_LAYERS - 1]
             cap.append(np.stack([np.full(N, centre), bone[j], bone[j1]], -1))
             cap = np.vstack(cap)
-            out.append(cap[:, ::-1] if flip else cap)
+            out.append(cap[:, ::-1] if k == 0 else cap)
+        if self.rounded:
+            for i in rings:
+                seq = np.vstack([ids[-1, i][None], levels[i]])                    # (M, N)
+                out += [strips(seq[:-1], seq[1:]), np.stack([seq[-1, j], seq[-1, j1], np.full(N, apex[i])], -1)]
         return np.vstack(out)
 
     def shell_volumes_mm3(self) -> np.ndarray:
@@ -187,7 +238,8 @@ class LayeredModel:
 
     # ------------------------------------------------------------------ lookups
     def outer_radius(self, theta: np.ndarray, z: np.ndarray) -> np.ndarray:
-        """Radius (mm) of the outer surface from the interpolated centroid, at angles/z (same shape)."""
+        """Radius (mm) of the outer surface from the interpolated centroid, at angles/z (same shape);
+        on a rounded tip, the outer dome's."""
         K, _, N, _ = self.rings.shape
         r = np.linalg.norm(self.rings[:, 0] - self.centroids[:, None], axis=-1)      # (K, N)
         t = (np.mod(theta, 2 * np.pi) / (2 * np.pi)) * N
@@ -199,7 +251,11 @@ class LayeredModel:
         k1 = np.minimum(k0 + 1, K - 1)
         rk0 = (1 - wj) * r[k0, j0] + wj * r[k0, (j0 + 1) % N]
         rk1 = (1 - wj) * r[k1, j0] + wj * r[k1, (j0 + 1) % N]
-        return (1 - wk) * rk0 + wk * rk1
+        R = (1 - wk) * rk0 + wk * rk1
+        if self.rounded:                                  # the outer dome beyond the last section
+            u = np.clip((np.asarray(z) - self.z_mm[-1]) / self.derived["tip_lengths_mm"][0], 0.0, 1.0)
+            R = R * np.sqrt(1.0 - u**2)
+        return R
 
     def polar(self, points: np.ndarray):
         """(theta, r, outer radius) of (M, 3) points about the interpolated section centroid."""
@@ -210,7 +266,9 @@ class LayeredModel:
         return theta, np.hypot(dx, dy), self.outer_radius(theta, points[:, 2])
 
     def z_frac(self, z: np.ndarray) -> np.ndarray:
-        return (z - self.z_mm[0]) / (self.z_mm[-1] - self.z_mm[0])
+        """Fraction of the length from the proximal to the last section, clipped to [0, 1] (a
+        rounded tip counts as the distal end)."""
+        return np.clip((z - self.z_mm[0]) / (self.z_mm[-1] - self.z_mm[0]), 0.0, 1.0)
 
     def to_json(self) -> dict:
         """Every parameter and derived number of the model (for model.json)."""
@@ -242,7 +300,10 @@ class LayeredModel:
                 "proximal": {"what": "flat proximal cut (end cap at z0), where the finger goes on",
                              "fixed": "its core (layers 3-5), all displacements (fem.contact.HELD: the hand "
                                       "is held; the skin goes on)"},
-                "distal": {"what": "flat distal cut where the rounded tip starts (end cap at z1), free"},
+                **({"tip": {"what": "rounded distal tip: each shell closes in a dome beyond z1, free",
+                            "dome_lengths_mm": self.derived["tip_lengths_mm"],
+                            "min_layer_thickness_mm": self.derived["min_thickness_tip"]}} if self.rounded else
+                   {"distal": {"what": "flat distal cut where the rounded tip starts (end cap at z1), free"}}),
             },
         }
 
@@ -405,7 +466,47 @@ def build_model(z_mm, polygons, params: ModelParams = ModelParams(), preset: str
                "bone_width_range": [float((ratio * width).min()), float((ratio * width).max())],
                "min_thickness": min_thick,
                "size_defaults": {"middle_width_mm": middle_width, "chosen": chosen}}
-    return LayeredModel(z, rings, cents, params, preset, sections_sha256, derived)
+    if params.tip_mm is None:
+        raise InputError("tip_mm None (the data's tip length) is resolved by model_from_args; give a length")
+    if params.tip_mm > 0:
+        derived.update(_dome_lengths(params.tip_mm, skin, f3, ratio[-1], rings[-1, 0], cents[-1], N))
+    model = LayeredModel(z, rings, cents, params, preset, sections_sha256, derived)
+    if model.rounded:
+        derived["min_thickness_tip"] = _check_dome_nesting(model)
+    return model
+
+
+def _dome_lengths(tip_mm, skin, f3, bone_ratio, outer_ring, centre, N) -> dict:
+    """Dome lengths (mm) of the 5 shells beyond the last section and the number of dome levels.
+    Skin shells are shorter by their depth, ring 3 and the bone by their scale factors."""
+    h = np.array([tip_mm, tip_mm - skin[1], tip_mm - skin[2], (1 - f3) * tip_mm, bone_ratio * tip_mm])
+    if np.any(np.diff(h) >= 0) or h[-1] <= 0:
+        need = max(skin[2] / f3, skin[2] / (1 - bone_ratio)) * 1.05
+        raise InputError(f"tip_mm {tip_mm:g} is too short to wrap the layers round the tip (dome lengths "
+                         + ", ".join(f"{v:.2f}" for v in h) + f" mm must decrease inwards); use at least "
+                         f"{need:.2f} mm, or 0 for a flat distal cut")
+    r_volar = float(np.linalg.norm(outer_ring[N // 4] - centre))
+    arc = 0.5 * np.pi * np.sqrt(0.5 * (r_volar**2 + tip_mm**2))       # quarter-ellipse length, mm
+    edge = float(np.mean(np.linalg.norm(np.roll(outer_ring, -1, axis=0) - outer_ring, axis=1)))
+    return {"tip_lengths_mm": h.tolist(), "tip_levels": max(4, int(np.ceil(arc / edge)))}
+
+
+def _check_dome_nesting(model: LayeredModel) -> list[float]:
+    """Each dome strictly inside the next outer shell: min distance (mm) of dome i+1's vertices
+    from shell i, i = 0..3. Raises InputError where they touch or cross."""
+    import igl
+
+    v = model.vertices()
+    _, _, levels, apex = model._vertex_index()
+    out = []
+    for i in range(N_LAYERS - 1):
+        pts = v[np.append(levels[i + 1].ravel(), apex[i + 1])]
+        d = -igl.signed_distance(pts, v, model.faces(i).astype(np.int64))[0]      # > 0 inside
+        if d.min() <= 1e-3:
+            raise InputError(f"the rounded tip: shell {i + 1}'s dome reaches shell {i}'s "
+                             "(use a longer tip_mm, thinner layers or a smaller bone)")
+        out.append(float(d.min()))
+    return out
 
 
 def size_defaults(middle_width_mm: float) -> dict:
@@ -466,7 +567,8 @@ def _min_gap(outer: np.ndarray, inner: np.ndarray) -> float:
 def model_from_args(source: str | None, preset: str | None, params: ModelParams, dz_mm: float = 1.0,
                     z_range_mm: tuple | None = None, tip_width_frac: float = 0.9) -> LayeredModel:
     """The layered model from a folder/file with sections.json or a preset name. Sections are cut
-    to z_range_mm, by default to the body before the rounded tip (see body_z_range)."""
+    to z_range_mm, by default to the body before the rounded tip (see body_z_range). params.tip_mm
+    None: a rounded tip as long as the data's (the preset's cap; the sections beyond the body)."""
     if (source is None) == (preset is None):
         raise InputError("give either a folder with sections.json or --preset (human, monkey), not both")
     if preset is not None:
@@ -478,11 +580,31 @@ def model_from_args(source: str | None, preset: str | None, params: ModelParams,
         polys = [check_polygon(p, f"section at z={zi:g} mm") for zi, p in zip(z, polys)]
         if z_range_mm is None:
             z_range_mm = body_z_range(z, polys, tip_width_frac)
+    tip_mm = params.tip_mm
+    if preset is not None and tip_mm is None:
+        from reconstruct.synthetic import FINGERTIP_PRESETS
+
+        tip_mm = float(FINGERTIP_PRESETS[preset]["cap"])              # its ellipsoidal cap
     if z_range_mm is not None:
         lo, hi = z_range_mm
         keep = (z >= lo - 1e-9) & (z <= hi + 1e-9)
+        if tip_mm is None:
+            tip_mm = tip_length(z, polys, int(np.flatnonzero(keep)[-1]))
         z, polys = z[keep], [p for p, k in zip(polys, keep) if k]
-    return build_model(z, polys, params, preset, digest)
+    return build_model(z, polys, replace(params, tip_mm=tip_mm), preset, digest)
+
+
+def tip_length(z: np.ndarray, polys: list, k: int) -> float:
+    """Length (mm) of the rounded tip beyond section k: the quarter ellipse from section k's width
+    (its half-axis) through the last section's width, w = W sqrt(1 - ((z - z_k) / h)^2)."""
+    if k + 1 >= len(z):
+        raise InputError(f"no sections beyond z={z[k]:g} mm to measure the rounded tip from; give its "
+                         "length (--tip MM) or a shorter z range")
+    w_ratio = np.ptp(polys[-1][:, 0]) / np.ptp(polys[k][:, 0])
+    if w_ratio >= 1:
+        raise InputError(f"the sections beyond z={z[k]:g} mm do not narrow into a tip; give its length "
+                         "(--tip MM)")
+    return float((z[-1] - z[k]) / np.sqrt(1.0 - w_ratio**2))
 
 
 def body_z_range(z: np.ndarray, polys: list, tip_width_frac: float) -> tuple[float, float]:

@@ -214,3 +214,21 @@ def test_receptor_site_column_and_run_json(cyl8, tmp_path):
     assert c3["loading"] == {"depth_mm": [0.5]} and c3["approach"] == [0.0, -1.0, 0.0]
     assert bar["sweep"] is None and bar["diameter_mm"] is None and bar["shapes"][0]["width_mm"] == 1.5
     assert bar["loading"] == {"force_N": 0.002, "equal_force": False, "max_depth_mm": 5.0}
+
+
+def test_scene_position_top_and_bad_position(cyl8, tmp_path, capsys):
+    """position_mm = "top": the pad point highest against the approach (the cylinder's crown, x = 0
+    up to its mesh); any other word is a one-line error."""
+    import json
+
+    scene = tmp_path / "s.toml"
+    scene.write_text('[[experiment]]\nname = "c"\nindentor = "C5"\nposition_mm = "top"\ndepth_mm = 0.5\n')
+    out = tmp_path / "s"
+    assert pipeline.main(["indent", str(cyl8), "--scene", str(scene), "--out", str(out), "--quiet"]) == 0
+    x = json.loads((out / "run.json").read_text())["experiments"][0]["position_mm"][0]
+    assert abs(x) < 0.2                                               # 0.125 mm elements on top
+    scene.write_text('[[experiment]]\nname = "c"\nindentor = "C5"\nposition_mm = "centre"\ndepth_mm = 0.5\n')
+    assert pipeline.main(["indent", str(cyl8), "--scene", str(scene), "--out", str(tmp_path / "b"),
+                          "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert 'position_mm "centre"' in err and "\n" not in err and not (tmp_path / "b").exists()

@@ -91,6 +91,84 @@ def test_shells_are_closed_and_consistently_oriented():
     assert len(np.unique(np.sort(merged, axis=1), axis=0)) == len(merged)   # each face once
 
 
+# ------------------------------------------------------------------ rounded distal tip
+def test_rounded_tip_on_a_cylinder_gives_hemispheres_of_every_layer():
+    """Cylinder R = 6 with a 6 mm tip: every shell is its own cylinder closed by a hemisphere (skin
+    radii R - 0.5, R - 1.5; ring 3 and the bone scaled, so their domes are hemispheres too), so the
+    layer volumes are closed-form and the skin is as thick round the tip as on the pad. The 128-gon
+    rings and dome levels lose under 0.3 % of each volume."""
+    import trimesh
+
+    R, L, t3, bone_d = 6.0, 5.0, 1.2, 2.0
+    m = cylinder_model(R, L, layer3_mm=t3, bone_diameter_mm=bone_d, bone_offset_mm=0.8, tip_mm=R)
+    radii = np.array([R, R - 0.5, R - 1.5, R - 1.5 - t3, bone_d / 2])
+    assert m.derived["tip_lengths_mm"] == pytest.approx(radii, rel=1e-3)
+    shells = np.pi * radii**2 * L + 2 / 3 * np.pi * radii**3
+    assert m.shell_volumes_mm3() == pytest.approx(shells, rel=3e-3)
+    assert m.layer_volumes_mm3() == pytest.approx(shells - np.append(shells[1:], 0.0), rel=5e-3)
+    # thickness round the tip: epidermis 0.5, dermis 1.0, layer 3 1.2 mm (the rings' chords cut 0.2 %)
+    assert m.derived["min_thickness_tip"][:3] == pytest.approx([0.5, 1.0, t3], abs=0.02)
+    for i in range(5):
+        s = trimesh.Trimesh(m.vertices(), m.faces(i))
+        assert s.is_watertight and s.is_winding_consistent
+    assert len(np.unique(np.sort(m.faces(), axis=1), axis=0)) == len(m.faces())   # each face once
+    # the outer radius follows the dome: at z1 + R sin(phi) it is R cos(phi)
+    phi = np.linspace(0.1, 1.4, 5)
+    assert m.outer_radius(np.full(5, 1.0), L + R * np.sin(phi)) == pytest.approx(R * np.cos(phi), rel=2e-3)
+    assert "tip" in m.to_json()["regions"] and "distal" not in m.to_json()["regions"]
+
+
+def test_rounded_tip_length_comes_from_the_preset_or_the_sections(tmp_path):
+    from dataclasses import replace
+
+    rounded = replace(params_for(None), tip_mm=None)
+    m = model_from_args(None, "human", replace(params_for("human"), tip_mm=None))
+    assert m.derived["tip_lengths_mm"][0] == 7.0                     # the preset's ellipsoidal cap
+    # a cylinder R 5 closed by a hemisphere, sections every 0.5 mm up to 0.5 mm short of the apex:
+    # the quarter ellipse from the cut at z = 8 through the last section's width gives R back
+    z_body, z_tip = np.arange(0.0, 8.5, 0.5), 8.0 + np.arange(0.5, 5.0, 0.5)
+    polys = [circle(5.0)] * len(z_body) + [circle(np.sqrt(25.0 - (zi - 8.0) ** 2)) for zi in z_tip]
+    src = write_sections(tmp_path / "s", polys, np.append(z_body, z_tip))
+    m = model_from_args(str(src), None, rounded, z_range_mm=(0.0, 8.0))
+    assert m.derived["tip_lengths_mm"][0] == pytest.approx(5.0, rel=1e-3)
+    # cut where the width drops below 90 % (z = 10), only 2.8 mm of tip is left: too short for the
+    # 1.5 mm skin plus the inner layers to wrap round, which the error says
+    with pytest.raises(InputError, match="too short to wrap the layers"):
+        model_from_args(str(src), None, rounded)
+    with pytest.raises(InputError, match="no sections beyond"):
+        model_from_args(str(src), None, rounded, z_range_mm=(0.0, 12.5))
+
+
+def test_tilted_distal_end_up_the_top_is_the_flat_cut_rim_or_the_rounded_pad():
+    """Why the inclined experiments need the rounded tip: with the finger tilted 30 deg distal end
+    up, the outer surface's highest point against the approach (where a plate touches first) is the
+    rim of a flat distal cut, but on the pad of a rounded tip, where the tip has turned 30 deg."""
+    from dataclasses import replace
+
+    from fem.contact import scene_position
+    from fem.indentors import approach_direction
+
+    place = {"approach": approach_direction(-30.0)}
+    for tip in (0.0, 3.5):
+        m = model_from_args(None, "monkey", replace(params_for("monkey"), tip_mm=tip))
+        outer = m.vertices()[np.unique(m.faces(0))]                  # the outer shell
+        x, y, z = scene_position("top", outer, place)
+        if tip == 0:
+            assert z == m.z_mm[-1]
+        else:        # ellipsoidal cap: the normal turns 30 deg where (z - z1) / tip = sin 30 / ~1
+            assert m.z_mm[-1] + 0.3 * tip < z < m.z_mm[-1] + 0.7 * tip
+            assert y > 0                                          # on the pad (volar, +y)
+
+
+def test_rounded_tip_too_short_for_the_layers_is_refused(tmp_path, capsys):
+    with pytest.raises(InputError, match="too short to wrap the layers"):
+        cylinder_model(6.0, 5.0, layer3_mm=1.2, tip_mm=2.0)      # layer 3's dome would pass the dermis'
+    err = run_bad(["--preset", "monkey", "--tip", "1"], tmp_path / "o", capsys)
+    assert "use at least" in err
+    assert "--tip 'round'" in run_bad(["--preset", "monkey", "--tip", "round"], tmp_path / "o", capsys)
+    run_bad(["--preset", "monkey", "--tip", "-3"], tmp_path / "o", capsys)
+
+
 # ------------------------------------------------------------------ bad input: exit 2, nothing written
 def write_sections(folder, polys, zs=None):
     folder.mkdir(parents=True, exist_ok=True)
