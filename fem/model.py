@@ -481,7 +481,7 @@ def _dome_lengths(tip_mm, skin, f3, bone_ratio, outer_ring, centre, N) -> dict:
     Skin shells are shorter by their depth, ring 3 and the bone by their scale factors."""
     h = np.array([tip_mm, tip_mm - skin[1], tip_mm - skin[2], (1 - f3) * tip_mm, bone_ratio * tip_mm])
     if np.any(np.diff(h) >= 0) or h[-1] <= 0:
-        need = max(skin[2] / f3, skin[2] / (1 - bone_ratio)) * 1.05
+        need = 1.05 * skin[2] / f3                          # the dermis' dome must pass layer 3's
         raise InputError(f"tip_mm {tip_mm:g} is too short to wrap the layers round the tip (dome lengths "
                          + ", ".join(f"{v:.2f}" for v in h) + f" mm must decrease inwards); use at least "
                          f"{need:.2f} mm, or 0 for a flat distal cut")
