@@ -170,8 +170,9 @@ def _add_indent(sub):
     p.add_argument("--axis", "--orientation", dest="orientation", default="parallel",
                    help="indentor length axis: parallel or perpendicular to the finger axis, or an "
                         "angle in degrees (default parallel; 2D models need parallel)")
-    p.add_argument("--position", type=float, nargs=2, metavar=("X", "Z"),
-                   help="indentor position on the pad in mm (default: x = 0 at the middle of the pad)")
+    p.add_argument("--position", nargs="+", metavar="X Z | top",
+                   help="indentor position on the pad in mm, or top: the pad point highest against the "
+                        "approach (default: x = 0 at the middle of the pad)")
     p.add_argument("--incline", type=float, help="finger incline in degrees (default: the model's support)")
     load = p.add_mutually_exclusive_group()
     load.add_argument("--depth", help="depths in mm beyond first touch: start:stop:step or list (e.g. 0:3:0.5)")
@@ -193,6 +194,17 @@ def _add_indent(sub):
     p.set_defaults(run=_run_indent)
 
 
+def _position(words: list[str]):
+    """--position: 'top' or X Z in mm."""
+    if words == ["top"]:
+        return "top"
+    try:
+        x, z = (float(w) for w in words)
+    except ValueError:
+        raise InputError(f"--position {' '.join(words)}: give X Z in mm or top") from None
+    return [x, z]
+
+
 def _run_indent(args):
     from pathlib import Path
 
@@ -207,7 +219,7 @@ def _run_indent(args):
         exp = {"name": args.indentor.replace(":", "_").replace(",", "_"), "indentor": args.indentor,
                "orientation": args.orientation}
         if args.position is not None:
-            exp["position_mm"] = list(args.position)
+            exp["position_mm"] = _position(args.position)
         if args.depth is not None:
             exp["depth_mm"] = args.depth
         else:

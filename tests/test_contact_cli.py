@@ -62,6 +62,7 @@ def test_scene_with_force_control_and_sweep(cyl8, tmp_path):
     (["--indentor", "punch:1", "--depth", "1", "--sweep", "x=0:20:5"], "sweep position"),
     (["--indentor", "punch:1", "--depth", "1", "--position", "9", "0"], "never touches"),
     (["--indentor", "C5"], "--depth or --force"),
+    (["--indentor", "C5", "--depth", "1", "--position", "1"], "give X Z in mm or top"),
 ])
 def test_bad_input_one_line_exit_2_nothing_written(cyl8, tmp_path, capsys, args, message):
     out = tmp_path / "bad"
@@ -227,6 +228,9 @@ def test_scene_position_top_and_bad_position(cyl8, tmp_path, capsys):
     assert pipeline.main(["indent", str(cyl8), "--scene", str(scene), "--out", str(out), "--quiet"]) == 0
     x = json.loads((out / "run.json").read_text())["experiments"][0]["position_mm"][0]
     assert abs(x) < 0.2                                               # 0.125 mm elements on top
+    assert pipeline.main(["indent", str(cyl8), "--indentor", "C5", "--depth", "0.5", "--position", "top",
+                          "--out", str(tmp_path / "cli"), "--quiet"]) == 0
+    assert json.loads((tmp_path / "cli" / "run.json").read_text())["experiments"][0]["position_mm"][0] == x
     scene.write_text('[[experiment]]\nname = "c"\nindentor = "C5"\nposition_mm = "centre"\ndepth_mm = 0.5\n')
     assert pipeline.main(["indent", str(cyl8), "--scene", str(scene), "--out", str(tmp_path / "b"),
                           "--quiet"]) == 2
