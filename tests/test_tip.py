@@ -45,26 +45,36 @@ def test_every_layer_wraps_round_the_tip(built):
         assert z[m.point_data[region] > 0].max() > Z1 + 0.7 * TIP, region
 
 
-@pytest.mark.slow
-def test_force_displacement_on_the_inclined_finger_presses_the_distal_pad(built, tmp_path):
-    """Thesis 6.2.3 (Fig. 6-23): cone, punch and plate aimed at the "top" point of the finger tilted
-    30 deg distal end up first touch the pad where the tip curves away (the exploration region),
-    not a cut rim; force grows with depth, and plate >= punch >= cone at every depth."""
+@pytest.fixture(scope="module")
+def force_displacement(built, tmp_path_factory):
+    """The shipped scene on the tilted rounded monkey, plus a 3 mm punch: {name: (rows, surface)}."""
     from pathlib import Path
 
     from fem.contact import load_scene, run_scene
 
     spec = load_scene(Path(pipeline.__file__).parent / "scenes" / "force_displacement.toml")
     spec["output"] = {"plots": False, "pvd": False}
-    run_scene(built, tmp_path / "fd", spec, progress=False)
+    spec["experiment"].append({"name": "punch3", "indentor": "punch:3", "position_mm": "top",
+                               "depth_mm": "0.25:2:0.25"})
+    out = tmp_path_factory.mktemp("fd")
+    run_scene(built, out, spec, progress=False)
+    return {e["name"]: (np.genfromtxt(out / f"{e['name']}.csv", delimiter=",", names=True, dtype=None,
+                                      encoding="utf-8"),
+                        np.genfromtxt(out / f"{e['name']}_surface.csv", delimiter=",", names=True))
+            for e in spec["experiment"]}
+
+
+@pytest.mark.slow
+def test_force_displacement_on_the_inclined_finger_presses_the_distal_pad(force_displacement):
+    """Thesis 6.2.3 (Fig. 6-23): cone, punch and plate aimed at the "top" point of the finger tilted
+    30 deg distal end up first touch the pad where the tip curves away (the exploration region),
+    not a cut rim; force grows with depth, and plate >= punch >= cone at every depth."""
     forces = {}
     for name in ("cone", "punch", "plate"):
-        rows = np.genfromtxt(tmp_path / "fd" / f"{name}.csv", delimiter=",", names=True, dtype=None,
-                             encoding="utf-8")
+        rows, s = force_displacement[name]
         assert all(rows["kkt_ok"]) and np.all(np.diff(rows["force_N"]) > 0), name
         assert rows["depth_mm"].tolist() == pytest.approx(np.arange(0.25, 2.01, 0.25).tolist())
         forces[name] = rows["force_N"]
-        s = np.genfromtxt(tmp_path / "fd" / f"{name}_surface.csv", delimiter=",", names=True)
         first = s[(s["step"] == 0) & (s["pressure_MPa"] > 0)]
         # a 30 deg tilt puts the top of an ellipsoidal cap at z1 + tip sin(30 deg)-ish: on the tip,
         # clear of the body's end and of the apex
@@ -73,3 +83,18 @@ def test_force_displacement_on_the_inclined_finger_presses_the_distal_pad(built,
         assert last["z_mm"].min() > 2.0, name                 # never near the proximal cut
     assert np.all(forces["plate"] >= forces["punch"] * (1 - 1e-9))
     assert np.all(forces["punch"] > forces["cone"])
+
+
+@pytest.mark.slow
+def test_a_flat_punch_in_full_contact_responds_linearly_the_plate_keeps_stiffening(force_displacement):
+    """Thesis 6.2.3: the linear model's force-displacement is non-linear only through the growing
+    contact; "once the indentor is fully in contact ... (circular flat indentor) the response of
+    the model to any further indentation is linear". A 3 mm punch on the monkey's tilted pad is in
+    full contact from about 0.75 mm: its force then grows by the same step every 0.25 mm, while the
+    plate's steps keep growing with its contact area."""
+    punch_rows, plate_rows = force_displacement["punch3"][0], force_displacement["plate"][0]
+    punch, plate = np.diff(punch_rows["force_N"]), np.diff(plate_rows["force_N"])
+    full = punch_rows["contact_area_mm2"][2:]                     # from 0.75 mm: the face, pi 1.5^2
+    assert full == pytest.approx(np.full(len(full), np.pi * 1.5**2), rel=0.1)
+    assert punch[2:] == pytest.approx(np.full(len(punch) - 2, punch[-1]), rel=0.01)   # linear in full contact
+    assert np.all(np.diff(plate) > 0) and plate[-1] > 3 * plate[0]     # the plate keeps stiffening
