@@ -50,6 +50,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import sys
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -739,8 +740,6 @@ def factorise(model, info, candidates=None, progress: bool = False):
     indentations to come: fewer condensed nodes factorise faster (PARDISO on the 284k-DOF human
     model, 2 cores: 52 s with all 6,913 volar nodes, 33 s with the 2,441 that C5 reaches at 3 mm,
     26 s with none). progress: say on stderr what is being factorised."""
-    import sys
-
     nodes = model.surface_nodes(CONTACT_REGION[model.dim]).nodes if candidates is None else candidates
     condense = (nodes, approach_down(info)) if 0 < len(nodes) <= CONDENSE_MAX_NODES else None
     if progress:
@@ -842,6 +841,12 @@ def run_scene(model_dir, out_dir, scene: dict, progress: bool = True) -> str:
         elif model.dim == 3:
             place["approach"] = approach_down(info)
         place["position_mm"] = scene_position(exp.get("position_mm", (0.0, middle_z)), sn.x, place)
+        if exp.get("position_mm") == "top":
+            top = sn.nodes[np.argmin(np.linalg.norm(sn.x - np.asarray(place["position_mm"])[:model.dim], axis=1))]
+            cuts = [r for r in ("distal", "proximal") if r in model.regions and top in model.region_nodes(r)]
+            if cuts:
+                print(f"warning: experiment '{name}': the top point is on the rim of the {cuts[0]} cut, not "
+                      "the pad; for an inclined finger mesh with --tip rounded", file=sys.stderr)
         ind = make_indentor(str(exp["indentor"]), **place)
         offsets = np.zeros((1, 3))
         if "sweep" in exp:

@@ -249,3 +249,12 @@ def test_3d_scenes_run_on_the_preset(built, tmp_path, scene):
         rows = [dict(zip(header, r.split(","))) for r in text[1:]]
         assert rows and all(r["kkt_ok"] == "True" for r in rows), name
         assert max(float(r["force_N"]) for r in rows) > 0, name
+
+
+def test_top_on_a_flat_cut_rim_is_warned_about(built, tmp_path, capsys):
+    """Tilted distal end up, a flat-ended finger's highest point is its distal cut's rim: aiming at
+    "top" there says so (and how to get the pad: a rounded tip)."""
+    out = tmp_path / "cone"
+    assert pipeline.main(["indent", str(built[0]), "--indentor", "cone", "--position", "top", "--incline", "-30",
+                          "--depth", "0.25", "--out", str(out), "--quiet"]) == 0
+    assert "top point is on the rim of the distal cut" in capsys.readouterr().err
