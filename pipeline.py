@@ -134,8 +134,9 @@ def _add_mesh(sub):
     p.add_argument("--support-span", type=float, help="support region angular span in deg (default 90)")
     p.add_argument("--support-z", type=float, nargs=2, metavar=("LO", "HI"),
                    help="support region as fractions of the length (default 0 0.3)")
-    p.add_argument("--support-incline", type=float, help="support plane angle to the horizontal in deg "
-                                                          "(30 for the thesis platform; default 0)")
+    p.add_argument("--support-incline", type=float,
+                   help="support plane angle to the horizontal in deg, positive with the distal end lower "
+                        "(-30: the thesis platform, distal end up; default 0)")
     p.add_argument("--z-range", type=float, nargs=2, metavar=("Z0", "Z1"),
                    help="use only the sections in this z range (mm)")
     p.add_argument("--tip-width-frac", type=float, default=0.9,

@@ -254,7 +254,7 @@ def approach_direction(incline_deg: float = 0.0) -> np.ndarray:
 
     As `vertical_up` of fem.model (support plane at incline_deg to the horizontal, distal end
     lower): the approach is minus vertical-up, a = (0, -cos i, +sin i). The thesis
-    force-displacement experiments used 30 deg.
+    force-displacement experiments used a 30 deg platform with the distal end up: -30.
     """
     i = math.radians(incline_deg)
     return np.array([0.0, -math.cos(i), math.sin(i)])

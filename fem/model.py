@@ -66,8 +66,8 @@ class ModelParams:
         the middle reference section.
     nail_*, support_*: angular span centred on -y (dorsal) and z range as fractions of the length.
     volar_*: the volar surface region, span centred on +y, over the whole length.
-    support_incline_deg: angle of the support plane to the horizontal (30 for the thesis's
-        platform); the support normal in the finger frame is +y (the finger lies on it), and
+    support_incline_deg: angle of the support plane to the horizontal, positive with the distal
+        end lower (-30 for the thesis's platform, distal end up); the support normal in the finger frame is +y (the finger lies on it), and
         `vertical_up` in model.json is +y turned by this angle about x (distal end lower).
     n_theta: rays per section.
     tip_mm: length (mm) of the rounded distal tip beyond the last section; 0: a flat distal cut (the
