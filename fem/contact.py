@@ -841,8 +841,8 @@ def run_scene(model_dir, out_dir, scene: dict, progress: bool = True) -> str:
         elif model.dim == 3:
             place["approach"] = approach_down(info)
         place["position_mm"] = scene_position(exp.get("position_mm", (0.0, middle_z)), sn.x, place)
-        if exp.get("position_mm") == "top":
-            top = sn.nodes[np.argmin(np.linalg.norm(sn.x - np.asarray(place["position_mm"])[:model.dim], axis=1))]
+        if exp.get("position_mm") == "top" and model.dim == 3:        # 2D models have no end cuts
+            top = sn.nodes[np.argmin(np.linalg.norm(sn.x - np.asarray(place["position_mm"]), axis=1))]
             cuts = [r for r in ("distal", "proximal") if r in model.regions and top in model.region_nodes(r)]
             if cuts:
                 print(f"warning: experiment '{name}': the top point is on the rim of the {cuts[0]} cut, not "
