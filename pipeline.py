@@ -141,7 +141,7 @@ def _add_mesh(sub):
                    help="use only the sections in this z range (mm)")
     p.add_argument("--tip-width-frac", type=float, default=0.9,
                    help="sections.json: end the model distally where the section width drops below this "
-                        "fraction of the widest (the rounded tip is not modelled; default 0.9)")
+                        "fraction of the widest (then a flat cut, or domes with --tip rounded; default 0.9)")
     p.add_argument("--tip", default="flat",
                    help="distal end: flat (a cut, as the thesis; default), rounded (every layer wraps round a "
                         "dome as long as the data's tip: the preset's cap, the sections beyond the body), or "

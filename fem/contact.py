@@ -800,19 +800,24 @@ def first_touch(points_mm, indentor) -> tuple[np.ndarray, np.ndarray]:
     return s, t0
 
 
-def scene_position(position, points, place) -> tuple:
-    """A scene's position_mm: (x, z) or (x, y, z) mm as given, or "top": the contact-region point
-    (P, dim) highest against the approach, where a plate would touch first (e.g. the pad of a
-    finger on an inclined support)."""
-    if isinstance(position, str) and position != "top":
-        raise InputError(f'position_mm "{position}": give [x, z] in mm or "top"')
-    if position != "top":
-        return tuple(position)
+def top_point(points, place) -> int:
+    """Index of the contact-region point (P, dim) highest against the approach of `place` (its
+    "approach", else its "incline_deg"): where a plate would touch first."""
     from fem.indentors import approach_direction
 
     a = place.get("approach")
     a = approach_direction(place.get("incline_deg", 0.0)) if a is None else np.asarray(a, float)
-    p = points[np.argmax(points @ -a[:points.shape[1]])]
+    return int(np.argmax(points @ -a[:points.shape[1]]))
+
+
+def scene_position(position, points, place) -> tuple:
+    """A scene's position_mm: (x, z) or (x, y, z) mm as given, or "top": the `top_point` of the
+    contact region (P, dim), e.g. the pad of a finger on an inclined support."""
+    if isinstance(position, str) and position != "top":
+        raise InputError(f'position_mm "{position}": give [x, z] in mm or "top"')
+    if position != "top":
+        return tuple(position)
+    p = points[top_point(points, place)]
     return tuple(float(v) for v in p) if len(p) == 3 else (float(p[0]), 0.0)
 
 
@@ -842,7 +847,7 @@ def run_scene(model_dir, out_dir, scene: dict, progress: bool = True) -> str:
             place["approach"] = approach_down(info)
         place["position_mm"] = scene_position(exp.get("position_mm", (0.0, middle_z)), sn.x, place)
         if exp.get("position_mm") == "top" and model.dim == 3:        # 2D models have no end cuts
-            top = sn.nodes[np.argmin(np.linalg.norm(sn.x - np.asarray(place["position_mm"]), axis=1))]
+            top = sn.nodes[top_point(sn.x, place)]
             cuts = [r for r in ("distal", "proximal") if r in model.regions and top in model.region_nodes(r)]
             if cuts:
                 print(f"warning: experiment '{name}': the top point is on the rim of the {cuts[0]} cut, not "

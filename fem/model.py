@@ -609,7 +609,8 @@ def tip_length(z: np.ndarray, polys: list, k: int) -> float:
 
 def body_z_range(z: np.ndarray, polys: list, tip_width_frac: float) -> tuple[float, float]:
     """z range from the first section to the last one, distal of the widest, still at least
-    tip_width_frac of the widest width: the rounded tip beyond it is not modelled (thesis 6.1)."""
+    tip_width_frac of the widest width. Beyond it the model ends in a flat cut (thesis 6.1) or, with
+    ModelParams.tip_mm, in domes."""
     if not 0 < tip_width_frac <= 1:
         raise InputError(f"tip_width_frac must be in (0, 1]; got {tip_width_frac}")
     width = np.array([np.ptp(p[:, 0]) for p in polys])
