@@ -13,7 +13,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from reconstruct.errors import InputError
+from common.errors import InputError
 
 HERE = Path(__file__).resolve().parent
 

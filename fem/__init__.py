@@ -2,7 +2,7 @@
 
 `from fem import Model, Material` loads the solver lazily, so `import fem` stays light.
 """
-from reconstruct.errors import InputError
+from common.errors import InputError
 
 __all__ = ["InputError", "Model", "Material", "Solution", "LinearSystem", "MEASURES"]
 

@@ -41,7 +41,7 @@ import numpy as np
 
 from fem.measures import MEASURES
 from fem.neural import NeuralData
-from reconstruct.errors import InputError
+from common.errors import InputError
 
 DEPTH_RANGE_MM = (0.5, 1.0)
 RECEPTOR_COLUMNS = ("step", "site", "x_mm", "y_mm", "z_mm", "depth_mm")
@@ -735,7 +735,7 @@ def analyze(runs, neural: NeuralData, candidates=None, fit_stimuli=None, recepto
 
 def write_report(out_dir, runs, neural: NeuralData, results: list[UnitAnalysis], top: int = 3) -> list[str]:
     """Tables (CSV + markdown), profile and scatter plots into out_dir (atomically). Returns file names."""
-    from reconstruct.io import staged_output, write_json
+    from common.staging import staged_output, write_json
 
     runs = as_runs(runs)
     with staged_output(out_dir) as tmp:

@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fem.reference import beam_deflection, waterbed_deflection
-from reconstruct.errors import InputError
+from common.errors import InputError
 
 N_LAYERS = 5
 BONE_LAYER = 5
@@ -751,7 +751,7 @@ def run_study_layers(model_dir, out_dir, base=None, layers="1,2,3,4", offsets="-
     """`pipeline.py study-layers`: layer_study.csv / .json / .png and profile.png in out_dir."""
     import time
 
-    from reconstruct.io import staged_output, write_json
+    from common.staging import staged_output, write_json
 
     t0 = time.perf_counter()
     data = read_deflection_csv(data_csv) if data_csv else []
@@ -820,7 +820,7 @@ def run_fit_material(model_dir, out_dir, deflection_csv=None, force_csv=None, ke
     """`pipeline.py fit-material`: fit.json, fit_profiles.csv, fit_profiles.png, force_fit.png."""
     import time
 
-    from reconstruct.io import staged_output, write_json
+    from common.staging import staged_output, write_json
 
     if deflection_csv is None and force_csv is None:
         raise InputError("fit-material needs --deflection CSV and/or --force CSV")
@@ -891,7 +891,7 @@ def run_contact_series(model_dir, out_dir, material=None, cylinders=None, forces
     """`pipeline.py contact-series`: cylinder_series.csv / .json / .png in out_dir."""
     import time
 
-    from reconstruct.io import staged_output, write_json
+    from common.staging import staged_output, write_json
 
     if (forces is None) == (depths is None):
         raise InputError("contact-series needs --force or --depth (one of the two)")
@@ -945,7 +945,7 @@ def run_line_load(model_dir, out_dir, depths="0.05,0.5,1,2", material=None, nu=N
     from pathlib import Path
 
     from fem.nonlinear import compare_line_load
-    from reconstruct.io import staged_output, write_json
+    from common.staging import staged_output, write_json
 
     t0 = time.perf_counter()
     depth_list = _parse_floats(depths, "depths")

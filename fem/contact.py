@@ -57,7 +57,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from reconstruct.errors import InputError
+from common.errors import InputError
 
 GAP_TOL_MM = 1e-8
 """Allowed penetration after deformation (mm) and the pivoting threshold on the gap."""
@@ -828,7 +828,7 @@ def run_scene(model_dir, out_dir, scene: dict, progress: bool = True) -> str:
 
     from fem.indentors import make_indentor
     from fem.receptors import DEFAULT_DEPTHS_MM, DEFAULT_MEASURES, ReceptorSampler, receptor_grid
-    from reconstruct.io import staged_output, write_json
+    from common.staging import staged_output, write_json
 
     t_start = time.perf_counter()
     model, info = read_model(model_dir, scene.get("material"), scene.get("nu"))

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from reconstruct.errors import InputError
+from common.errors import InputError
 
 
 def ramp_and_hold(amplitude=1.0, ramp_s=0.1, hold_s=1.0, release_s=0.1, rest_s=0.5, dt_s=1e-3,

@@ -7,23 +7,12 @@ at the element centroid (cell data, so nothing is averaged across a layer interf
 from __future__ import annotations
 
 import csv
-import os
-from pathlib import Path
 
 import numpy as np
 
+from common.staging import atomic_write
+
 _VTK_CELL = {3: "tetra10", 2: "triangle6"}
-
-
-def _atomic(path, write):
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.partial{path.suffix}")
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
 
 
 def quadratic_cells(model) -> np.ndarray:
@@ -46,7 +35,7 @@ def write_vtu(path, solution) -> None:
     mesh = meshio.Mesh(points, [(_VTK_CELL[model.dim], quadratic_cells(model))],
                        point_data={"displacement_mm": disp},
                        cell_data={k: [np.asarray(v)] for k, v in cell_data.items()})
-    _atomic(path, lambda tmp: meshio.write(tmp, mesh, file_format="vtu"))
+    atomic_write(path, lambda tmp: meshio.write(tmp, mesh, file_format="vtu"))
 
 
 def write_csv(path, points, columns: dict[str, np.ndarray]) -> None:
@@ -62,4 +51,4 @@ def write_csv(path, points, columns: dict[str, np.ndarray]) -> None:
             for i in range(len(x)):
                 w.writerow([*(f"{v:.6g}" for v in x[i]), *(f"{np.asarray(c)[i]:.9g}" for c in columns.values())])
 
-    _atomic(path, write)
+    atomic_write(path, write)

@@ -29,7 +29,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from reconstruct.errors import InputError
+from common.errors import InputError
 
 CYLINDERS_MM = {"C1": 1.59, "C2": 3.18, "C3": 4.76, "C4": 6.35, "C5": 9.52, "C6": 12.7,
                 "C7": 19.05, "C8": 25.4}

@@ -11,7 +11,7 @@ from typing import Mapping
 
 import numpy as np
 
-from reconstruct.errors import InputError
+from common.errors import InputError
 
 NU_MAX = 0.4999
 BONE_LAYER = 5

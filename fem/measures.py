@@ -17,7 +17,7 @@ from typing import Callable
 
 import numpy as np
 
-from reconstruct.errors import InputError
+from common.errors import InputError
 
 
 class State:

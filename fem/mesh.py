@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 
 from fem.model import N_LAYERS, LayeredModel, check_positive
-from reconstruct.errors import InputError
-from reconstruct.io import staged_output, write_json
+from common.errors import InputError
+from common.staging import staged_output, write_json
 
 
 

@@ -18,8 +18,8 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from reconstruct.errors import InputError
-from reconstruct.io import staged_output, write_json
+from common.errors import InputError
+from common.staging import staged_output, write_json
 
 
 @dataclass(frozen=True)

@@ -4,7 +4,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from fem.model import PRESET_PARAMS, model_from_args, params_for
-from reconstruct.errors import InputError
+from common.errors import InputError
 
 PRESETS_2D = ("block", "square", "cylinder8", "cylinder16")
 

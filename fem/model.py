@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from reconstruct.errors import InputError
+from common.errors import InputError
 
 N_LAYERS = 5
 #: Per-preset layer-3 thickness and bone offset (not in the thesis; the monkey section is too thin

@@ -18,7 +18,7 @@ of one afferent plotted against the stimulus position):
   (free text is kept); a file holding several orientations must be narrowed to one.
 
 Bad input (missing columns, empty or NaN rates, negative rates, non-numeric positions) raises
-`reconstruct.errors.InputError` with a one-line message naming the file and line.
+`common.errors.InputError` with a one-line message naming the file and line.
 """
 from __future__ import annotations
 
@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from reconstruct.errors import InputError
+from common.errors import InputError
 
 REQUIRED = ("stimulus", "position_mm", "rate_ips")
 OPTIONAL = ("unit", "orientation")

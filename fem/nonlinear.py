@@ -47,7 +47,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from reconstruct.errors import InputError
+from common.errors import InputError
 
 
 class _SaddleSolver:

@@ -21,7 +21,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from fem.measures import State, check_names, evaluate
-from reconstruct.errors import InputError
+from common.errors import InputError
 
 DEFAULT_DEPTHS_MM = (0.5, 0.75, 1.0)
 INTERFACE_SNAP_MM = 0.03

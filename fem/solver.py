@@ -75,7 +75,7 @@ from skfem import (Basis, BilinearForm, ElementTetP1, ElementTetP2, ElementTriP1
 from skfem.helpers import div, dot
 
 from fem.materials import Material
-from reconstruct.errors import InputError
+from common.errors import InputError
 
 #: strain tensor components returned by strain_operator, per space dimension
 STRAIN_COMPONENTS = {3: ("xx", "yy", "zz", "yz", "xz", "xy"), 2: ("xx", "yy", "xy")}

@@ -1,4 +1,4 @@
 """Image stage: turntable photographs of a fingertip replica -> axial sections -> closed surface."""
-from reconstruct.errors import InputError
+from common.errors import InputError
 
 __all__ = ["InputError"]

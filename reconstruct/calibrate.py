@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from reconstruct.errors import InputError
+from common.errors import InputError
 from reconstruct.silhouette import Borders
 
 

@@ -16,7 +16,7 @@ import numpy as np
 from scipy.signal import savgol_filter
 from scipy.spatial import ConvexHull, HalfspaceIntersection
 
-from reconstruct.errors import InputError
+from common.errors import InputError
 
 N_POINTS = 360            # points per output section (uniform in the normal angle)
 

@@ -23,8 +23,8 @@ import cv2
 import numpy as np
 from tqdm import tqdm
 
-from reconstruct.errors import InputError
-from reconstruct.io import staged_output, write_json
+from common.errors import InputError
+from common.staging import staged_output, write_json
 
 SHAPES = ("fingertip", "sphere", "ellipsoid")
 

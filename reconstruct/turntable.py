@@ -17,7 +17,7 @@ import cv2
 import numpy as np
 from PIL import Image
 
-from reconstruct.errors import InputError
+from common.errors import InputError
 
 IMAGE_SUFFIXES = {".png", ".tif", ".tiff", ".jpg", ".jpeg", ".bmp"}
 _ANGLE_IN_NAME = re.compile(r"(-?\d+(?:\.\d+)?)\s*deg", re.IGNORECASE)

@@ -13,7 +13,7 @@ from fem.analysis import (IndentRun, Probe2D, as_runs, fit_measure, gap_analysis
                           point_load_field, rank_candidates, rank_per_stimulus, receptive_field,
                           settling_separation, two_point_curves)
 from fem.neural import make_neural, read_neural_csv, write_neural_csv
-from reconstruct.errors import InputError
+from common.errors import InputError
 
 SCENE = """[receptors]
 depths_mm = "0.5:1:0.125"

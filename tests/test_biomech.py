@@ -8,7 +8,7 @@ from fem.biomech import (DeflectionExperiment, Profile, code_of, cylinder_series
                          fit_free_length, fit_material, layer_study, parse_code, read_deflection_csv,
                          read_force_csv, side_profile)
 from fem.reference import WATERBED_PER_BEAM, beam_deflection, waterbed_deflection
-from reconstruct.errors import InputError
+from common.errors import InputError
 
 
 # --------------------------------------------------------------------------- closed forms

@@ -9,7 +9,7 @@ import scipy.optimize as so
 from fem import contact
 from fem.indentors import make_indentor
 from fem.reference import hertz_sphere
-from reconstruct.errors import InputError
+from common.errors import InputError
 
 
 # --------------------------------------------------------------------------- half-space compliance

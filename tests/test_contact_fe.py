@@ -154,7 +154,7 @@ def test_condensing_only_the_reach_gives_the_full_answer(dim):
     observation solve) and receptor strains as one condensed on all candidates; an indentor beyond
     the reach is refused with a one-line error."""
     from fem.contact import reach
-    from reconstruct.errors import InputError
+    from common.errors import InputError
 
     if dim == 2:
         model, _ = half_plane(0.48, fine_mm=0.05, size_mm=20.0)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from fem.dynamics import LumpedReceptor, measure_time_course, phases, ramp_and_hold, silence_delay
-from reconstruct.errors import InputError
+from common.errors import InputError
 
 RAMP, HOLD, RELEASE = 0.1, 1.0, 0.1
 

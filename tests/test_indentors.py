@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from fem import indentors as ind
-from reconstruct.errors import InputError
+from common.errors import InputError
 
 RNG = np.random.default_rng(3)
 

@@ -10,7 +10,7 @@ import pytest
 import pipeline
 from fem.mesh import boundary_faces, label_tets, quality, straddle_check, tet_volumes
 from fem.model import model_from_args, params_for
-from reconstruct.errors import InputError
+from common.errors import InputError
 
 ARGS = ["mesh", "--preset", "monkey", "--size", "0.8", "--quiet"]
 

@@ -6,7 +6,7 @@ import pytest
 
 import pipeline
 from fem.model import ModelParams, build_model, model_from_args, params_for
-from reconstruct.errors import InputError
+from common.errors import InputError
 
 
 def circle(r, n=360, c=(0.0, 0.0)):

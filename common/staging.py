@@ -34,6 +34,18 @@ def staged_output(out_dir: str | os.PathLike):
         shutil.rmtree(tmp, ignore_errors=True)
 
 
+def atomic_write(path: str | os.PathLike, write) -> None:
+    """Call write(tmp_path) on a temporary name beside `path`, then rename it to `path`."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.partial{path.suffix}")
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
 def write_json(path: str | os.PathLike, data) -> None:
     """Write JSON atomically (temporary name, then rename)."""
     path = Path(path)

@@ -1,0 +1,68 @@
+"""The table writer: CSV (RFC 4180 line endings, a header of column names with unit suffixes,
+`_mm`, `_N`, `_MPa`, ...) and the same table as Markdown. Columns are formatted whole, with
+NumPy, not value by value.
+
+    write_csv("out/c5.csv", {"depth_mm": depths, "force_N": forces, "kkt_ok": ok})
+"""
+from __future__ import annotations
+
+import csv
+import io
+from typing import Mapping
+
+import numpy as np
+
+
+def format_column(values, float_format: str = "%.9g", nan: str | None = None) -> np.ndarray:
+    """(n,) strings of one column: floats with `float_format` (NaN as `nan` when given), anything
+    else (ints, bools, strings) as str()."""
+    v = np.asarray(values)
+    if v.dtype.kind == "f":
+        out = np.char.mod(float_format, v).astype(object)
+        if nan is not None:
+            out[np.isnan(v)] = nan
+        return out
+    if v.dtype.kind == "O":         # mixed column: format the float entries only
+        return np.array([float_format % x if isinstance(x, float) and not (nan is not None and x != x)
+                         else (nan if isinstance(x, float) else str(x)) for x in v], dtype=object)
+    return v.astype(str).astype(object)
+
+
+def columns_of(rows: list[Mapping]) -> dict[str, list]:
+    """Rows (dicts with the same keys, in order) -> {column name: values}."""
+    return {k: [r[k] for r in rows] for k in rows[0]} if rows else {}
+
+
+def _cells(columns: Mapping[str, object], float_format: str, nan: str | None) -> list[np.ndarray]:
+    cols = [format_column(c, float_format, nan) for c in columns.values()]
+    lengths = {len(c) for c in cols}
+    if len(lengths) > 1:
+        raise ValueError(f"table columns differ in length: {dict(zip(columns, map(len, cols)))}")
+    return cols
+
+
+def csv_text(columns: Mapping[str, object], float_format: str = "%.9g", nan: str | None = None) -> str:
+    """The CSV text of a table {name: (n,) values} (header, then n rows; CRLF line ends)."""
+    cols = _cells(columns, float_format, nan)
+    buf = io.StringIO()
+    w = csv.writer(buf)
+    w.writerow(list(columns))
+    if cols and len(cols[0]):
+        w.writerows(np.stack(cols, axis=1).tolist())     # csv quotes the cells that need it
+    return buf.getvalue()
+
+
+def write_csv(path, columns: Mapping[str, object], float_format: str = "%.9g", nan: str | None = None) -> None:
+    """Write a table {name: (n,) values} as CSV at `path`."""
+    with open(path, "w", newline="") as fh:
+        fh.write(csv_text(columns, float_format, nan))
+
+
+def write_markdown(path, columns: Mapping[str, object], title: str, float_format: str = "%.9g",
+                   nan: str | None = None) -> None:
+    """Write a table {name: (n,) values} as a Markdown table under a `# title` heading."""
+    cols = _cells(columns, float_format, nan)
+    md = [f"# {title}", "", "| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
+    md += ["| " + " | ".join(row) + " |" for row in zip(*cols)]
+    with open(path, "w") as fh:
+        fh.write("\n".join(md) + "\n")
