@@ -4,6 +4,7 @@
     python pipeline.py reconstruct sample_images/ --out out/sample
     python pipeline.py render fingertip --out my_images/
     python pipeline.py <command> --help
+    fingertip <command> ...            (the same, once installed with `pip install -e .`)
 
 Bad input ends with one line `error: ...` on stderr and exit code 2, and writes nothing.
 """
@@ -44,22 +45,17 @@ def _add_reconstruct(sub):
 
 
 def _run_reconstruct(args):
-    from reconstruct.pipeline import reconstruct_folder
+    from commands.reconstruct import run_reconstruct
 
-    result = reconstruct_folder(args.images, args.out, spacing_mm=tuple(args.spacing_mm),
-                                tol_mm=args.tol_mm, tip_fraction=args.tip_fraction,
-                                progress=not args.quiet, force=args.force)
-    if args.quiet:
-        return
-    if result is None:
-        print(f"{args.out}: outputs are current for these images and options (use --force to redo)")
-    else:
-        print(result.summary())
+    text = run_reconstruct(args.images, args.out, spacing_mm=args.spacing_mm, tol_mm=args.tol_mm,
+                           tip_fraction=args.tip_fraction, force=args.force, progress=not args.quiet)
+    if not args.quiet:
+        print(text)
 
 
 # --------------------------------------------------------------------------- render
 def _add_render(sub):
-    from reconstruct.synthetic import SHAPES
+    from fem.presets import SHAPES
 
     p = sub.add_parser("render", help="render a synthetic turntable set of a known shape (+ ground truth)")
     p.add_argument("shape", choices=sorted(SHAPES), help="shape to render")
@@ -84,18 +80,14 @@ def _add_render(sub):
 
 
 def _run_render(args):
-    from reconstruct.synthetic import render_turntable, make_shape
+    from commands.render import run_render
 
-    shape = make_shape(args.shape, groove=args.groove, rod=not args.no_rod)
-    info = render_turntable(shape, args.out, n_views=args.views, span_deg=args.span_deg,
-                            size_px=tuple(args.size), mm_per_px=args.mm_per_px, aspect=args.aspect,
-                            blur_px=args.blur_px, noise=args.noise, vignetting=args.vignetting,
-                            axis_offset_px=args.axis_offset_px, tilt_deg=args.tilt_deg,
-                            seed=args.seed, progress=not args.quiet)
+    text = run_render(args.shape, args.out, views=args.views, span_deg=args.span_deg, size_px=args.size,
+                      mm_per_px=args.mm_per_px, aspect=args.aspect, blur_px=args.blur_px, noise=args.noise,
+                      vignetting=args.vignetting, axis_offset_px=args.axis_offset_px, tilt_deg=args.tilt_deg,
+                      rod=not args.no_rod, groove=args.groove, seed=args.seed, progress=not args.quiet)
     if not args.quiet:
-        print(f"rendered {info['views']} views of '{args.shape}' to {args.out} "
-              f"({info['size_px'][0]} x {info['size_px'][1]} px, {info['mm_per_px']} mm/px); "
-              f"ground truth in {args.out}/truth.json")
+        print(text)
 
 
 # --------------------------------------------------------------------------- mesh
@@ -152,9 +144,17 @@ def _add_mesh(sub):
 
 
 def _run_mesh(args):
-    from fem.mesh_cli import run_mesh_command
+    from commands.mesh import ModelOptions, run_mesh
 
-    text = run_mesh_command(args)
+    options = ModelOptions(epidermis_mm=args.epidermis, dermis_mm=args.dermis, layer3_mm=args.layer3,
+                           layer3_scale=args.layer3_scale, bone_diameter_mm=args.bone_diameter,
+                           bone_profile=args.bone_profile, bone_offset_mm=args.bone_offset,
+                           nail_span_deg=args.nail_span, nail_z_frac=args.nail_z, support_span_deg=args.support_span,
+                           support_z_frac=args.support_z, support_incline_deg=args.support_incline, tip=args.tip)
+    text = run_mesh(args.out, source=args.source, preset=args.preset, section_z_mm=args.section_z, bone=args.bone,
+                    size_mm=args.size, coarse_mm=args.coarse, growth=args.growth, fine_depth_mm=args.fine_depth,
+                    options=options, z_range_mm=args.z_range, tip_width_frac=args.tip_width_frac,
+                    force=args.force, progress=not args.quiet)
     if not args.quiet:
         print(text)
 
@@ -195,55 +195,17 @@ def _add_indent(sub):
     p.set_defaults(run=_run_indent)
 
 
-def _position(words: list[str]):
-    """--position: 'top' or X Z in mm."""
-    if words == ["top"]:
-        return "top"
-    try:
-        x, z = (float(w) for w in words)
-    except ValueError:
-        raise InputError(f"--position {' '.join(words)}: give X Z in mm or top") from None
-    return [x, z]
-
-
 def _run_indent(args):
-    from pathlib import Path
+    from commands.indent import run_indent
 
-    from fem.contact import load_scene, run_scene
-
-    if args.scene:
-        scene = load_scene(args.scene)
-        name = Path(args.scene).stem
-    else:
-        if not args.indentor or (args.depth is None and args.force is None):
-            raise InputError("indent needs --scene, or --indentor with --depth or --force")
-        exp = {"name": args.indentor.replace(":", "_").replace(",", "_"), "indentor": args.indentor,
-               "orientation": args.orientation}
-        if args.position is not None:
-            exp["position_mm"] = _position(args.position)
-        if args.depth is not None:
-            exp["depth_mm"] = args.depth
-        else:
-            exp.update(force_N=args.force, equal_force=args.equal_force, max_depth_mm=args.max_depth)
-        if args.sweep:
-            exp["sweep"] = args.sweep
-        if args.incline is not None:
-            exp["incline_deg"] = args.incline
-        scene = {"experiment": [exp], "receptors": {"depths_mm": args.receptor_depths,
-                                                    "spacing_mm": args.receptor_spacing}}
-        if args.line:
-            axis, _, value = args.line.partition("=")
-            scene["receptors"]["line"] = [axis, value]
-        name = exp["name"]
-    for key in ("material", "nu"):
-        if getattr(args, key) is not None:
-            scene[key] = getattr(args, key)
-    if args.pvd is not None:
-        scene.setdefault("output", {})["pvd"] = args.pvd
-    out = args.out or str(Path(args.model) / f"indent_{name}")
-    summary = run_scene(args.model, out, scene, progress=not args.quiet)
+    text = run_indent(args.model, scene=args.scene, indentor=args.indentor, orientation=args.orientation,
+                      position=args.position, incline=args.incline, depth=args.depth, force=args.force,
+                      equal_force=args.equal_force, max_depth=args.max_depth, sweep=args.sweep,
+                      material=args.material, nu=args.nu, receptor_depths=args.receptor_depths,
+                      receptor_spacing=args.receptor_spacing, line=args.line, pvd=args.pvd, out=args.out,
+                      progress=not args.quiet)
     if not args.quiet:
-        print(summary)
+        print(text)
 
 
 # --------------------------------------------------------------------------- biomechanical verification
@@ -275,7 +237,7 @@ def _add_study_layers(sub):
 
 
 def _run_study_layers(args):
-    from fem.biomech import run_study_layers
+    from commands.biomech import run_study_layers
 
     text = run_study_layers(args.model, args.out or str(Path(args.model) / "study_layers"), base=args.base,
                             layers=args.layers, offsets=args.offsets, depths=args.depth, indentor=args.indentor,
@@ -307,7 +269,7 @@ def _add_fit_material(sub):
 
 
 def _run_fit_material(args):
-    from fem.biomech import run_fit_material
+    from commands.biomech import run_fit_material
 
     text = run_fit_material(args.model, args.out or str(Path(args.model) / "fit_material"),
                             deflection_csv=args.deflection, force_csv=args.force, keep_ratios=args.keep_ratios,
@@ -343,7 +305,7 @@ def _add_line_load(sub):
 
 
 def _run_line_load(args):
-    from fem.biomech import run_line_load
+    from commands.biomech import run_line_load
 
     text = run_line_load(args.model, args.out or str(Path(args.model) / "line_load"), depths=args.depth,
                          material=args.material, nu=args.nu, large_deformation=args.large_deformation,
@@ -372,7 +334,7 @@ def _add_contact_series(sub):
 
 
 def _run_contact_series(args):
-    from fem.biomech import run_contact_series
+    from commands.biomech import run_contact_series
 
     text = run_contact_series(args.model, args.out or str(Path(args.model) / "contact_series"),
                               material=args.material, cylinders=args.cylinders, forces=args.force,
@@ -403,7 +365,7 @@ def _add_analyze(sub):
 
 
 def _run_analyze(args):
-    from fem.analysis import run_analyze
+    from commands.analyze import run_analyze
 
     text = run_analyze(args.results, args.neural, out_dir=args.out, diameters_mm=args.diameters,
                        measures=args.measures, fit_on=args.fit_on, orientation=args.orientation,
@@ -426,13 +388,10 @@ def _add_run(sub):
 
 
 def _run_run(args):
-    flags = [f for f, on in (("--force", args.force), ("--quiet", args.quiet)) if on]
-    steps = [["reconstruct", args.images, "--out", args.out, *flags],
-             ["mesh", args.out, "--out", args.out, "--size", str(args.size), *flags]]
-    if args.scene:
-        steps.append(["indent", args.out, "--scene", args.scene, *(["--quiet"] if args.quiet else [])])
+    from commands.reconstruct import chain_steps
+
     parser = build_parser()
-    for step in steps:
+    for step in chain_steps(args.images, args.out, args.size, args.scene, force=args.force, quiet=args.quiet):
         if not args.quiet:
             print(f"== {step[0]}")
         stage = parser.parse_args(step)
@@ -444,8 +403,8 @@ COMMANDS = [_add_reconstruct, _add_render, _add_mesh, _add_indent, _add_study_la
             _add_line_load, _add_contact_series, _add_analyze, _add_run]
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="pipeline.py", description=__doc__.split("\n\n")[0],
+def build_parser(prog: str = "pipeline.py") -> argparse.ArgumentParser:
+    parser = _Parser(prog=prog, description=__doc__.split("\n\n")[0],
                      formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     for add in COMMANDS:
@@ -454,8 +413,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run one command (argv: its words, default sys.argv[1:]); returns the exit code."""
+    installed = argv is None and Path(sys.argv[0]).stem == "fingertip"      # the console script
     try:
-        args = build_parser().parse_args(argv)
+        args = build_parser("fingertip" if installed else "pipeline.py").parse_args(argv)
         args.run(args)
     except InputError as exc:
         print(f"error: {exc}", file=sys.stderr)

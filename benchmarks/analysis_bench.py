@@ -1,6 +1,6 @@
 #!/usr/bin/env python
 """Receptor-analysis experiments on the 2D cylinder (8 mm) with bone: the numbers and figures of
-the README's receptor-analysis section (thesis 4.2, 4.3, 4.5.4, 4.5.5, 8.4).
+docs/receptors-and-analysis.md (thesis 4.2, 4.3, 4.5.4, 4.5.5, 8.4).
 
     python benchmarks/analysis_bench.py [--work out/analysis_bench]     (about 1 min on 2 cores)
 
@@ -26,24 +26,27 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 
-import matplotlib  # noqa: E402
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
 
 import pipeline  # noqa: E402
-from fem.analysis import (IndentRun, Probe2D, gap_analysis, point_load_field, receptive_field,  # noqa: E402
-                          settling_separation, two_point_curves)
+from fem.plots import save  # noqa: E402
+from fem.probes import (Probe2D, gap_analysis, point_load_field, receptive_field, settling_separation,  # noqa: E402
+                        two_point_curves)
+from fem.runfolder import IndentRun  # noqa: E402
 from fem.dynamics import LumpedReceptor, measure_time_course, ramp_and_hold  # noqa: E402
 from fem.indentors import make_indentor  # noqa: E402
 
 RESULTS = HERE / "results"
 
 
+def _subplots(*grid, figsize, **kw):
+    """(Figure, axes) like pyplot.subplots, without pyplot."""
+    fig = Figure(figsize=figsize)
+    return fig, fig.subplots(*grid, **kw)
+
+
 def _save(fig, name):
-    fig.tight_layout()
-    fig.savefig(RESULTS / f"analysis_bench_{name}.png", dpi=100)
-    plt.close(fig)
+    save(fig, RESULTS / f"analysis_bench_{name}.png", dpi=100)
 
 
 def main(argv=None):
@@ -70,7 +73,7 @@ def main(argv=None):
     md += ["", "Shear hole against the threshold (fraction of the peak): " + ", ".join(
         f"{q:.1f}: {receptive_field(shear.positions_mm, shear.values, q * shear.values.max()).hole_mm:.2f} mm"
         for q in (0.3, 0.4, 0.5, 0.6, 0.7))]
-    fig, ax = plt.subplots(2, 3, figsize=(11, 6))
+    fig, ax = _subplots(2, 3, figsize=(11, 6))
     for k, (c, f) in enumerate(fields.items()):
         ax[0, k].plot(f.positions_mm, f.values, "-")
         ax[0, k].axhline(f.threshold, color="k", ls="-.")
@@ -102,7 +105,7 @@ def main(argv=None):
     for key in ("force", "displacement"):
         md.append(f"| {key} / last | " + " | ".join(f"{v:.3f}" for v in (c[key] / c[key][-1])[::2]) + " |")
         md.append(f"| {key} / alone | " + " | ".join(f"{v:.3f}" for v in (c[key] / c['alone_' + key])[::2]) + " |")
-    fig, ax = plt.subplots(1, 2, figsize=(10, 3.6))
+    fig, ax = _subplots(1, 2, figsize=(10, 3.6))
     for a, key in zip(ax, ("force", "displacement")):
         a.plot(0.5 * seps, c[key], "o-", label="two loads")
         a.plot(0.5 * seps, c["alone_" + key], "s--", label="one load alone at +s/2")
@@ -119,7 +122,7 @@ def main(argv=None):
            "| gap mm | inter-peak mm | peak left | peak right | slope per mm |", "|---|---|---|---|---|"]
     md += [f"| {r['gap_mm']:g} | {r['interpeak_mm']:.3f} | {r['peak_left']:.4f} | {r['peak_right']:.4f} | "
            f"{r['slope_per_mm']:.4f} |" for r in rows]
-    fig, ax = plt.subplots(figsize=(8, 3.6))
+    fig, ax = _subplots(figsize=(8, 3.6))
     for g, v in zip(gaps, prof):
         ax.plot(probe.sites_x_mm, v, label=f"gap {g:g} mm")
     ax.set(xlabel="receptor x, mm", ylabel="|strain_xy| at 0.75 mm")
@@ -134,7 +137,7 @@ def main(argv=None):
         assert pipeline.main(["indent", str(model), "--scene", str(HERE.parent / "examples" / "analysis_gratings.toml"),
                               "--out", str(runs_dir), "--quiet"]) == 0
     run = IndentRun(runs_dir)
-    fig, ax = plt.subplots(3, 1, figsize=(8, 7), sharex=True)
+    fig, ax = _subplots(3, 1, figsize=(8, 7), sharex=True)
     x_sites = run.population("grating_0.5", "sed_MPa", 0.75, 0.0)[0]
     pos, central = run.profile("grating_0.5", "sed_MPa", 0.75, 0.0, align=False)
     pos = pos - x_sites[run.site_index("grating_0.5", 0.0)]          # stimulus position relative to the receptor
@@ -154,7 +157,7 @@ def main(argv=None):
         md.append(f"| {x_site:.2f} | {100 * np.sqrt(np.mean((shifted[ok] - central[ok]) ** 2)) / central.max():.1f} |")
     ax[-1].set_xlabel("grating position relative to the receptor, mm")
     _save(fig, "profiles")
-    fig, a = plt.subplots(figsize=(8, 3))
+    fig, a = _subplots(figsize=(8, 3))
     a.plot(xp, vp, ".-")
     a.set(title="population response: all receptors at 0.75 mm, grating at -8 mm", xlabel="receptor x, mm",
           ylabel="sed_MPa")
@@ -167,7 +170,7 @@ def main(argv=None):
     sed = [probe.measure(c5, [0.0], ["sed_MPa"], depth_mm=d)[0]["sed_MPa"][0, 0, 60] for d in depths]
     t, depth_t = ramp_and_hold(1.0, 0.1, 1.0, 0.1)
     S = measure_time_course(depth_t, depths, sed)
-    fig, ax = plt.subplots(3, 1, figsize=(7, 6), sharex=True)
+    fig, ax = _subplots(3, 1, figsize=(7, 6), sharex=True)
     ax[0].plot(t, S)
     ax[0].set(ylabel="SED at 0.75 mm, MPa", title="C5 ramp 0.1 s to 1 mm, hold 1 s, release 0.1 s")
     md += ["", "## Lumped receptor model driven by the SED under a C5 ramp-and-hold", "",

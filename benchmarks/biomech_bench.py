@@ -37,7 +37,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 import pipeline  # noqa: E402
-from fem.biomech import DeflectionExperiment, Profile, cylinder_series, fit_material, layer_study  # noqa: E402
+from fem.biomech import DeflectionExperiment, Profile, cylinder_series, layer_study  # noqa: E402
+from fem.biomech_fit import fit_material  # noqa: E402
 from fem.nonlinear import compare_line_load  # noqa: E402
 
 

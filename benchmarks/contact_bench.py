@@ -29,8 +29,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from fem.contact import (CONTACT_REGION, MAX_DEPTH_MM, ContactModel, factorise, reach, read_model,  # noqa: E402
-                         receptor_surface)
+from fem.contact import MAX_DEPTH_MM, ContactModel, reach  # noqa: E402
+from fem.modelfolder import CONTACT_REGION, factorise, read_model, receptor_surface  # noqa: E402
 from fem.indentors import make_indentor  # noqa: E402
 from fem.receptors import ReceptorSampler, receptor_grid  # noqa: E402
 
@@ -130,7 +130,7 @@ def case_c5(args):
 def case_dorsal(args):
     """Thesis 6.2.1 trend: under a 2 mm line load (wedge perpendicular to the axis, middle of the
     pad) the dorsal half moves vertically less than 10 % of the largest vertical displacement; the
-    proximal cut's core is held (fem.contact.HELD). Dorsal half: the nodes of the outer surface
+    proximal cut's core is held (fem.modelfolder.HELD). Dorsal half: the nodes of the outer surface
     below the section centroid, the reference of the model's volar half and nail span, on the
     surface the thesis draws its contours (figures 6-5, 6-7); the centroid's y(z) is a
     volume-weighted quadratic fit of the tets' y against z (within 0.01 mm of the presets' section

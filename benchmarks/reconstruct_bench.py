@@ -22,8 +22,9 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 
+from fem.presets import make_shape, shape_from_truth  # noqa: E402
 from reconstruct.pipeline import reconstruct, sections_document  # noqa: E402
-from reconstruct.synthetic import compare_to_truth, make_shape, render_turntable  # noqa: E402
+from reconstruct.synthetic import compare_to_truth, load_truth, render_turntable  # noqa: E402
 from reconstruct.turntable import load_turntable  # noqa: E402
 
 SIZES = {"350x450 @ 80 um": ((350, 450), 0.08), "700x900 @ 40 um": ((700, 900), 0.04),
@@ -41,7 +42,8 @@ def run(views: int, size: str, cache: Path, repeats: int = 2) -> dict:
         t0, c0 = time.perf_counter(), time.process_time()
         rec = reconstruct(load_turntable(folder))
         best, cpu = min(best, time.perf_counter() - t0), min(cpu, time.process_time() - c0)
-    err = compare_to_truth(sections_document(rec), folder)
+    truth = load_truth(folder)
+    err = compare_to_truth(sections_document(rec), shape_from_truth(truth), truth)
     vol = rec.surface.volume / err["true_volume_mm3"] - 1
     return dict(views=views, size=size, mean_px=err["mean_px"], max_px=err["max_px"],
                 mean_um=err["mean_mm"] * 1e3, max_um=err["max_mm"] * 1e3, volume_pct=100 * vol,
@@ -80,10 +82,10 @@ def main():
            for r in rows]
     (out / "reconstruct_bench.md").write_text("\n".join(md) + "\n")
 
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(1, 2, figsize=(10, 4))
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(10, 4))
+    ax = fig.subplots(1, 2)
     for size in SIZES:
         rs = [r for r in rows if r["size"] == size]
         if len(rs) > 1:

@@ -54,13 +54,12 @@ def resolve(model, system):
         out[f"solve{k}_s"], out[f"solve{k}_cpu_s"] = time.perf_counter() - w0, time.process_time() - c0
     out["refine"] = system._factor.refinements
     out["refine_tol"] = system._factor.refine_tol
-    pardiso = getattr(system._factor, "_pardiso", None)
-    out["nnz_L"] = pardiso.nnz_factor / 1e6 if pardiso is not None else float("nan")
+    out["nnz_L"] = system._factor.nnz_factor / 1e6
     return out
 
 
 def fingertip(path):
-    """Model.from_mesh on a mesh.vtu with nail/support/volar regions (held as fem.contact.open_model
+    """Model.from_mesh on a mesh.vtu with nail/support/volar regions (held as fem.modelfolder.open_model
     holds them): 0.1 N spread over `volar`. Then the factorisation again with the volar nodes'
     vertical displacement condensed (what open_model does for contact), and the compliance inverse."""
     def held(model):
@@ -83,7 +82,7 @@ def fingertip(path):
     cond._factor.compliance_block()
     w2, c2 = time.perf_counter(), time.process_time()
     return {**row, "condensed": len(cond.condensed[0]), "cond_factor_s": w1 - w0, "cond_factor_cpu_s": c1 - c0,
-            "cond_nnz_L": cond._factor._pardiso.nnz_factor / 1e6, "inverse_s": w2 - w1, "inverse_cpu_s": c2 - c1}
+            "cond_nnz_L": cond._factor.nnz_factor / 1e6, "inverse_s": w2 - w1, "inverse_cpu_s": c2 - c1}
 
 
 def run(n_arc, n_rad, nu=0.48, contrast=None):
@@ -178,7 +177,7 @@ def main(argv=None):
                     ("refinement tolerance", "{refine_tol:.0e}"), ("residual", "{residual:.1e}")]) + """
 
 With the volar nodes' vertical displacement condensed (`Model.system(condense=)`, as
-`fem.contact.open_model` factorises for contact): factorisation with the Schur complement, and
+`fem.modelfolder.open_model` factorises for contact): factorisation with the Schur complement, and
 the inverse of the Schur complement (the whole contact compliance).
 
 """ + table([row], [("condensed nodes", "{condensed}"), ("factorisation [s]", "{cond_factor_s:.1f}"),

@@ -6,7 +6,7 @@ from common.errors import InputError
 
 __all__ = ["InputError", "Model", "Material", "Solution", "LinearSystem", "MEASURES"]
 
-_LAZY = {"Model": "fem.solver", "Solution": "fem.solver", "LinearSystem": "fem.solver",
+_LAZY = {"Model": "fem.solver", "Solution": "fem.fields", "LinearSystem": "fem.system",
          "Material": "fem.materials", "MEASURES": "fem.measures"}
 
 

@@ -13,7 +13,7 @@ positive definite. With the indentor tip travelled t along a, the gap after defo
 solved by block principal pivoting (Judice and Pires 1994; Murty's single-pivot rule as the
 finite-termination backup), which only needs the compliance columns of the nodes it tries as
 active. When the system was factorised with the candidates condensed along the approach
-(`Model.system(condense=(nodes, a))`, as `open_model` does), C is the inverse of their Schur
+(`Model.system(condense=(nodes, a))`, as `fem.modelfolder.open_model` does), C is the inverse of their Schur
 complement, all of it at once with no solves (`CondensedCompliance`); otherwise its columns are
 computed lazily with the factorised stiffness, many right-hand sides at once, and cached
 (`FactorCompliance`). Either way sweeps and depth or force iterations reuse them. Candidates held
@@ -36,21 +36,17 @@ deflection (Hertz within 3 %, tests/test_contact_fe.py) but nodal forces alterna
 and midside nodes (about 1 : 2 against a consistent load), so raw f_i / A_i overstates the peak
 pressure by about a third: hence the facet-averaged pressure.
 
-    model, system, region, info = open_model("out/cyl8")          # fem.solver Model, factorised
+    model, system, region, info = open_model("out/cyl8")          # fem.modelfolder: factorised
     cm = ContactModel.from_fe(model, system, region, observe=model.strain_operator(points))
     res = cm.indent(indentor, depth_mm=1.0)             # or force_N=0.2, equal_force=True
     res.total_force_N, res.contact_area_mm2, res.max_pressure_MPa, res.kkt, res.observed
     cm.sweep(indentor, offsets_mm, force_N=0.2)         # one small LCP per position
-    run_scene("out/cyl8", "out/cyl8/indent_x", load_scene("scenes/bars.toml"))   # files
 
 Any other elastic body works through `ContactModel(points, areas, compliance_for)` with a
 `Compliance` (e.g. `MatrixCompliance` for an analytic half-space).
 """
 from __future__ import annotations
 
-import contextlib
-import functools
-import sys
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -58,6 +54,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from common.errors import InputError
+from fem.linalg import blas_threads
 
 GAP_TOL_MM = 1e-8
 """Allowed penetration after deformation (mm) and the pivoting threshold on the gap."""
@@ -65,10 +62,9 @@ FORCE_RTOL = 1e-6
 """Relative tolerance on prescribed forces."""
 MAX_DEPTH_MM = 5.0
 SERIAL_BLAS_BELOW = 1500
-"""Active sets smaller than this are factorised on one BLAS thread (measured: an 843-node Cholesky
-takes 0.013 s on one thread and 0.1-1.7 s on two when the other core is busy)."""
-CONDENSE_MAX_NODES = 8000
-"""Largest candidate set whose dense compliance `open_model` stores (8000 nodes: 0.5 GB, k^3 flops)."""
+"""Active sets smaller than this are factorised on one BLAS thread: for such small Cholesky
+factors a second thread mostly waits for the other core, which is often busy, and can slow the
+factorisation several times over."""
 
 
 # --------------------------------------------------------------------------- facets and pressure
@@ -246,8 +242,8 @@ class CondensedCompliance(FactorCompliance):
         return out
 
     def block(self, rows, cols) -> np.ndarray:
-        """As Compliance.block; C is symmetric, so whole rows are gathered (contiguous; 1.6 ms
-        against 11 ms for np.ix_ on 1500 x 300 of a 2000 x 2000 block) and transposed (a view)."""
+        """As Compliance.block; C is symmetric, so whole rows are gathered (contiguous memory,
+        several times faster than np.ix_ on a large block) and transposed (a view)."""
         return self._C[self._row[np.asarray(cols, int)]][:, self._row[np.asarray(rows, int)]].T
 
     def observed(self, idx) -> np.ndarray:
@@ -272,19 +268,6 @@ class BlockedError(InputError):
 
 
 # --------------------------------------------------------------------------- LCP
-@functools.cache
-def _thread_controller():
-    """threadpoolctl's view of the loaded BLAS libraries (scanning them costs ~6 ms: done once)."""
-    from threadpoolctl import ThreadpoolController
-
-    return ThreadpoolController()
-
-
-def _blas_threads(limit):
-    """Context limiting BLAS threads (None: no limit)."""
-    return contextlib.nullcontext() if limit is None else _thread_controller().limit(limits=limit, user_api="blas")
-
-
 @dataclass
 class LCPSolution:
     force: np.ndarray        # (n,) f >= 0
@@ -311,7 +294,7 @@ def solve_lcp(columns, q, start=None, tol_mm: float = GAP_TOL_MM, max_iter: int 
         factor = None
         if idx.size:
             cols = columns(idx)
-            with _blas_threads(1 if idx.size < SERIAL_BLAS_BELOW else None):
+            with blas_threads(1 if idx.size < SERIAL_BLAS_BELOW else None):
                 factor = sla.cho_factor(cols[idx], lower=True)
                 f[idx] = sla.cho_solve(factor, -q[idx])
             g = q + cols @ f[idx]
@@ -349,7 +332,7 @@ class ContactResult:
     area_mm2: np.ndarray            # (m,) tributary areas
     kkt: dict = field(default_factory=dict)
     _observed: np.ndarray | None = field(default=None, repr=False)
-    _source: "ContactModel | None" = field(default=None, repr=False)
+    _source: ContactModel | None = field(default=None, repr=False)
     _unseen: np.ndarray | None = field(default=None, repr=False)    # candidates outside the reach
 
     @property
@@ -451,12 +434,6 @@ class ContactModel:
                                         fixed=system.fixed)
         return cls(sn.x, sn.area, compliance_for, facets=(facets, facet_shares(facets, size, model.dim)), **kw)
 
-    @classmethod
-    def from_solver(cls, solve, n_dofs, points_mm, dofs, areas_mm2, observe=None, chunk=64, **kw):
-        """Model on a factorised FE system (see FactorCompliance for the arguments)."""
-        return cls(points_mm, areas_mm2,
-                   lambda a: FactorCompliance(solve, n_dofs, dofs, a, observe=observe, chunk=chunk), **kw)
-
     def compliance(self, direction) -> Compliance:
         key = tuple(np.round(direction, 12))
         if key not in self._compliance:
@@ -522,7 +499,7 @@ class ContactModel:
         if depth_mm is not None:
             if depth_mm < 0:
                 raise InputError(f"depth must be >= 0 mm, got {depth_mm}")
-            res, lcp, sub = self.solve_travel(indentor, t0.min() + depth_mm, self._warm)
+            res = self.solve_travel(indentor, t0.min() + depth_mm, self._warm)[0]
             return self._finish(res, indentor)
         return self._force(indentor, float(force_N), equal_force, max_depth_mm, t0)
 
@@ -629,132 +606,7 @@ class ContactModel:
         return ones.T @ sol
 
 
-# --------------------------------------------------------------------------- experiments on a model folder
-EXPERIMENT_KEYS = {"name", "indentor", "orientation", "position_mm", "incline_deg", "approach",
-                   "depth_mm", "force_N", "equal_force", "max_depth_mm", "sweep"}
-SCENE_KEYS = {"material", "nu", "receptors", "output", "experiment"}
-RECEPTOR_KEYS = {"depths_mm", "spacing_mm", "line", "measures"}
-OUTPUT_KEYS = {"pvd", "plots"}
-
-
-def parse_values(text) -> np.ndarray:
-    """'a:b:step' (inclusive), 'v1,v2,...', a number or a list -> (n,) floats."""
-    if isinstance(text, (int, float)):
-        return np.array([float(text)])
-    if isinstance(text, (list, tuple)):
-        return np.asarray(text, float)
-    try:
-        if ":" in text:
-            a, b, step = (float(t) for t in text.split(":"))
-            if not step > 0 or b < a:
-                raise ValueError
-            return a + step * np.arange(int(np.floor((b - a) / step + 1e-9)) + 1)
-        return np.array([float(t) for t in text.split(",")])
-    except ValueError:
-        raise InputError(f"bad value list '{text}': use start:stop:step (e.g. 0.5:3:0.5) or v1,v2,...") from None
-
-
-def parse_sweep(text) -> tuple[int, np.ndarray]:
-    """'x=-3:3:0.1' or 'z=...' -> (axis index, (k,) offsets in mm)."""
-    axis, eq, values = str(text).partition("=")
-    if not eq or axis.strip() not in ("x", "z"):
-        raise InputError(f"bad sweep '{text}': use x=start:stop:step or z=start:stop:step (mm)")
-    return {"x": 0, "z": 2}[axis.strip()], parse_values(values)
-
-
-def load_scene(path) -> dict:
-    """Read a TOML scene file; unknown keys are errors (a typo must not be silently ignored)."""
-    import tomllib
-
-    try:
-        with open(path, "rb") as fh:
-            scene = tomllib.load(fh)
-    except (OSError, tomllib.TOMLDecodeError) as exc:
-        raise InputError(f"cannot read scene '{path}': {exc}") from None
-    _check_keys(scene, SCENE_KEYS, "scene")
-    _check_keys(scene.get("receptors", {}), RECEPTOR_KEYS, "[receptors]")
-    _check_keys(scene.get("output", {}), OUTPUT_KEYS, "[output]")
-    if not scene.get("experiment"):
-        raise InputError(f"scene '{path}' has no [[experiment]] table")
-    for exp in scene["experiment"]:
-        _check_keys(exp, EXPERIMENT_KEYS, "[[experiment]]")
-    return scene
-
-
-def _check_keys(table, allowed, where):
-    unknown = set(table) - allowed
-    if unknown:
-        raise InputError(f"unknown key(s) {sorted(unknown)} in {where}; allowed: {sorted(allowed)}")
-
-
-# The proximal cut is where the distal phalanx joins the rest of the finger, which the experiments
-# hold still (thesis 2.2.2: hand restrained, no joint moves; 6.2.1: the ends' boundary conditions
-# differ markedly and deformation fades faster proximally). Left free, the cut swung by 12.5 % of a
-# 2 mm line load on the human preset (README "Indentation"). Only its core is held (layers 3-5,
-# `proximal_core`): the skin goes on proximally, so indentors as long as the finger (bars and
-# wedges along the axis, steps, large cylinders) press the cut's skin instead of a fixed rim.
-HELD = {3: {"nail": 0.0, "support": (None, 0.0, None), "proximal_core": 0.0}, 2: {"fixed": 0.0}}
-"""Constraints of a model folder per dimension: 3D nail and the proximal cut's core fixed, support
-held along its normal; 2D `fixed` held (`held_regions` skips regions a mesh lacks)."""
-SKIN_LAYERS = (1, 2)
-"""Epidermis and dermis: their vertices on the proximal cut are not held (`held_regions`)."""
-CONTACT_REGION = {3: "volar", 2: "surface"}
-"""Contact candidate region of a model folder per dimension."""
-
-
-def read_model(model_dir, material=None, nu=None):
-    """(fem.solver.Model, model.json dict) of a model folder; material and nu default to model.json's."""
-    import json
-    from pathlib import Path
-
-    from fem.solver import Model
-
-    folder = Path(model_dir)
-    if not (folder / "mesh.vtu").is_file():
-        raise InputError(f"no mesh.vtu in '{model_dir}': run `pipeline.py mesh` first or give a model folder")
-    info = json.loads((folder / "model.json").read_text()) if (folder / "model.json").is_file() else {}
-    model = Model.from_mesh(folder / "mesh.vtu", material=material or info.get("material", "m33338"),
-                            nu=info.get("nu", 0.48) if nu is None else nu)
-    return model, info
-
-
-def held_regions(model) -> dict:
-    """`HELD` for the model's dimension, restricted to the regions its mesh has. Adds the region
-    `proximal_core` to a 3D model with a `proximal` cut: the cut's vertices outside the skin."""
-    if "proximal" in model.regions and "proximal_core" not in model.regions:
-        skin = np.zeros(model.mesh.nvertices, bool)
-        skin[model.mesh.t[:, np.isin(model.layer, SKIN_LAYERS)].ravel()] = True
-        model.regions["proximal_core"] = model.regions["proximal"] & ~skin
-    return {k: v for k, v in HELD[model.dim].items() if k in model.regions}
-
-
-def approach_down(info) -> np.ndarray:
-    """(3,) default approach of a model folder: minus its support's vertical_up (-y if none)."""
-    return -np.asarray(info.get("regions", {}).get("support", {}).get("vertical_up", [0.0, 1.0, 0.0]), float)
-
-
-def factorise(model, info, candidates=None, progress: bool = False):
-    """LinearSystem of a model folder's model, held as `HELD` says, factorised with contact
-    candidates condensed along `approach_down` when there are at most CONDENSE_MAX_NODES of them.
-    candidates: P2 node ids (default: every node of the contact region), e.g. `reach` of the
-    indentations to come: fewer condensed nodes factorise faster (PARDISO on the 284k-DOF human
-    model, 2 cores: 52 s with all 6,913 volar nodes, 33 s with the 2,441 that C5 reaches at 3 mm,
-    26 s with none). progress: say on stderr what is being factorised."""
-    nodes = model.surface_nodes(CONTACT_REGION[model.dim]).nodes if candidates is None else candidates
-    condense = (nodes, approach_down(info)) if 0 < len(nodes) <= CONDENSE_MAX_NODES else None
-    if progress:
-        print(f"factorising {model.ndof} DOFs" + (f" with {len(nodes)} contact candidates condensed"
-              if condense else "") + " ...", file=sys.stderr, flush=True)
-    return model.system(held_regions(model), condense=condense)
-
-
-def open_model(model_dir, material=None, nu=None, progress: bool = False):
-    """(fem.solver.Model, LinearSystem, contact region name, model.json dict) of a model folder,
-    factorised with every contact candidate condensed (`factorise`)."""
-    model, info = read_model(model_dir, material, nu)
-    return model, factorise(model, info, progress=progress), CONTACT_REGION[model.dim], info
-
-
+# --------------------------------------------------------------------------- reach
 REACH_MARGIN_MM = 0.25
 """Allowance (mm) beyond an indentation's depth within which `reach` includes candidate nodes."""
 
@@ -778,16 +630,6 @@ def reach(points_mm, indentor, offsets_mm, depth_mm: float, margin_mm: float = R
     return mask
 
 
-def receptor_surface(model, sn) -> tuple[np.ndarray, np.ndarray]:
-    """(positions (k, dim) mm, outward normals (k, dim)) of the contact-region nodes `sn` that may
-    carry receptor sites: all but those on a 3D end cut. Below a node on the rim of a cut the
-    receptors lie on the cut plane, which the mesh reproduces only within pytetwild's envelope
-    (0.02 mm): with a 0.05 mm envelope one fell outside the mesh."""
-    ends = [model.region_nodes(r) for r in ("proximal", "distal") if r in model.regions]
-    keep = ~np.isin(sn.nodes, np.concatenate(ends)) if ends else np.ones(len(sn.nodes), bool)
-    return sn.x[keep], sn.normal[keep]
-
-
 def first_touch(points_mm, indentor) -> tuple[np.ndarray, np.ndarray]:
     """(standoff (m, n_parts) mm of each candidate point (m, dim) from each part along the approach,
     inf where it misses; (n_parts,) travel at which each part first touches). Raises InputError
@@ -798,298 +640,3 @@ def first_touch(points_mm, indentor) -> tuple[np.ndarray, np.ndarray]:
         raise InputError(f"indentor {indentor.name} at {np.round(indentor.origin_mm, 3).tolist()} mm "
                          f"never touches the finger surface: move it over the pad or change the approach")
     return s, t0
-
-
-def top_point(points, place) -> int:
-    """Index of the contact-region point (P, dim) highest against the approach of `place` (its
-    "approach", else its "incline_deg"): where a plate would touch first."""
-    from fem.indentors import approach_direction
-
-    a = place.get("approach")
-    a = approach_direction(place.get("incline_deg", 0.0)) if a is None else np.asarray(a, float)
-    return int(np.argmax(points @ -a[:points.shape[1]]))
-
-
-def scene_position(position, points, place) -> tuple:
-    """A scene's position_mm: (x, z) or (x, y, z) mm as given, or "top": the `top_point` of the
-    contact region (P, dim), e.g. the pad of a finger on an inclined support."""
-    if isinstance(position, str) and position != "top":
-        raise InputError(f'position_mm "{position}": give [x, z] in mm or "top"')
-    if position != "top":
-        return tuple(position)
-    p = points[top_point(points, place)]
-    return tuple(float(v) for v in p) if len(p) == 3 else (float(p[0]), 0.0)
-
-
-def run_scene(model_dir, out_dir, scene: dict, progress: bool = True) -> str:
-    """Run every [[experiment]] of a scene on a model folder; write CSV, PNG (and PVD) atomically
-    into out_dir. Returns a text summary."""
-    import time
-
-    from fem.indentors import make_indentor
-    from fem.receptors import DEFAULT_DEPTHS_MM, DEFAULT_MEASURES, ReceptorSampler, receptor_grid
-    from common.staging import staged_output, write_json
-
-    t_start = time.perf_counter()
-    model, info = read_model(model_dir, scene.get("material"), scene.get("nu"))
-    region = CONTACT_REGION[model.dim]
-    sn = model.surface_nodes(region)
-    middle_z = 0.5 * (sn.x[:, 2].min() + sn.x[:, 2].max()) if model.dim == 3 else 0.0
-    plans, touched = [], np.zeros(len(sn.nodes), bool)
-    for k, exp in enumerate(scene["experiment"]):
-        name = str(exp.get("name", f"experiment{k + 1}"))
-        place = {"orientation": exp.get("orientation", "parallel")}
-        if "approach" in exp:
-            place["approach"] = exp["approach"]
-        elif "incline_deg" in exp:
-            place["incline_deg"] = float(exp["incline_deg"])
-        elif model.dim == 3:
-            place["approach"] = approach_down(info)
-        place["position_mm"] = scene_position(exp.get("position_mm", (0.0, middle_z)), sn.x, place)
-        if exp.get("position_mm") == "top" and model.dim == 3:        # 2D models have no end cuts
-            top = sn.nodes[top_point(sn.x, place)]
-            cuts = [r for r in ("distal", "proximal") if r in model.regions and top in model.region_nodes(r)]
-            if cuts:
-                print(f"warning: experiment '{name}': the top point is on the rim of the {cuts[0]} cut, not "
-                      "the pad; for an inclined finger mesh with --tip rounded", file=sys.stderr)
-        ind = make_indentor(str(exp["indentor"]), **place)
-        offsets = np.zeros((1, 3))
-        if "sweep" in exp:
-            axis, vals = parse_sweep(exp["sweep"])
-            offsets = np.zeros((len(vals), 3))
-            offsets[:, axis] = vals
-        if ("depth_mm" in exp) == ("force_N" in exp):
-            raise InputError(f"experiment '{name}': give depth_mm or force_N (one of them)")
-        if "depth_mm" in exp:
-            loads = [{"depth_mm": float(d)} for d in parse_values(exp["depth_mm"])]
-            deepest = max(d["depth_mm"] for d in loads)
-        else:
-            loads = [{"force_N": float(exp["force_N"]), "equal_force": bool(exp.get("equal_force", False)),
-                      "max_depth_mm": float(exp.get("max_depth_mm", MAX_DEPTH_MM))}]
-            deepest = loads[0]["max_depth_mm"]
-        touched |= reach(sn.x, ind, offsets, deepest)
-        plans.append((name, exp, place, ind, offsets, loads))
-    rc = scene.get("receptors", {})
-    line = rc.get("line")
-    if line is not None:
-        axis = {"x": 0, "y": 1, "z": 2}.get(str(line[0]))
-        try:
-            value = 0.5 * (sn.x[:, axis].min() + sn.x[:, axis].max()) if line[1] == "middle" else float(line[1])
-        except (ValueError, TypeError, IndexError):
-            axis = None
-        if axis is None or axis >= model.dim:
-            raise InputError(f"bad receptor line {line}: use z=<mm> or z=middle (3D), x=<mm>")
-        line = (axis, value)
-    x, normal = receptor_surface(model, sn)
-    grid = receptor_grid(x, normal, parse_values(rc.get("depths_mm", list(DEFAULT_DEPTHS_MM))),
-                         float(rc.get("spacing_mm", 1.0)), line)
-    sampler = ReceptorSampler(model, grid)
-    measures = list(rc.get("measures", DEFAULT_MEASURES))
-    system = factorise(model, info, sn.nodes[touched], progress)     # only what the scene can touch
-    cm = ContactModel.from_fe(model, system, region, observe=sampler.operator)
-    runs, records = [], []
-    for name, exp, place, ind, offsets, loads in plans:
-        t0 = time.perf_counter()
-        steps = []
-        for off in offsets:
-            for load in loads:
-                res = cm.sweep(ind, off[None], **load)[0] if "sweep" in exp else cm.indent(ind, **load)
-                steps.append((off, res))
-        runs.append((name, ind, steps, time.perf_counter() - t0))
-        records.append(_experiment_record(name, exp, place, ind, offsets, loads, "sweep" in exp))
-        if progress:
-            print(f"{name}: {len(steps)} indentations in {runs[-1][3]:.2f} s", flush=True)
-    out = scene.get("output", {})
-    with staged_output(out_dir) as tmp:
-        for name, ind, steps, _ in runs:
-            _write_run(tmp, name, ind, steps, cm, sn, sampler, measures, model,
-                       pvd=bool(out.get("pvd", len(steps) <= 20)), plots=bool(out.get("plots", True)))
-        write_json(tmp / "run.json", _run_record(model_dir, model, info, rc, line, grid, measures, records))
-    total = time.perf_counter() - t_start
-    lines = [f"indentation results in {out_dir} ({total:.1f} s; model {model.ndof} DOFs, "
-             f"{len(sn.nodes)} contact candidates, {len(grid.points_mm)} receptor points)"]
-    for name, ind, steps, secs in runs:
-        worst = max(r.kkt["penetration_mm"] for _, r in steps)
-        lines.append(f"  {name}: {len(steps)} indentations, {secs:.2f} s, force "
-                     f"{min(r.total_force_N for _, r in steps):.4g}-{max(r.total_force_N for _, r in steps):.4g} N, "
-                     f"max penetration {worst:.1e} mm")
-    return "\n".join(lines)
-
-
-RUN_FORMAT = 1
-"""Version of the run.json layout (raise it when a key changes meaning)."""
-
-
-def _experiment_record(name, exp, place, ind, offsets, loads, sweep) -> dict:
-    """run.json entry of one experiment: indentor (code, shapes, diameter where it has one),
-    placement, sweep axis and offsets (mm), loading."""
-    from dataclasses import asdict
-
-    shapes = [{"shape": type(p).__name__, **{k: (None if v == np.inf else v) for k, v in asdict(p).items()}}
-              for p in ind.parts]
-    diameters = {p.get("diameter_mm") for p in shapes}
-    if len(loads) and "force_N" in loads[0]:
-        loading = {"force_N": loads[0]["force_N"], "equal_force": loads[0]["equal_force"],
-                   "max_depth_mm": loads[0]["max_depth_mm"]}
-    else:
-        loading = {"depth_mm": [d["depth_mm"] for d in loads]}
-    axis = parse_sweep(exp["sweep"])[0] if sweep else None
-    return {"name": name, "indentor": str(exp["indentor"]), "shapes": shapes,
-            "diameter_mm": diameters.pop() if len(diameters) == 1 else None,
-            "orientation": place["orientation"], "position_mm": list(place["position_mm"]),
-            "incline_deg": place.get("incline_deg"), "approach": ind.approach.tolist(),
-            "length_axis": ind.e1.tolist(), "origin_mm": ind.origin_mm.tolist(),
-            "sweep": None if axis is None else {"axis": "xyz"[axis], "offsets_mm": offsets[:, axis].tolist()},
-            "loading": loading, "indentations": len(offsets) * len(loads),
-            "files": [f"{name}.csv", f"{name}_surface.csv", f"{name}_receptors.csv"]}
-
-
-def _run_record(model_dir, model, info, rc, line, grid, measures, experiments) -> dict:
-    """run.json: what produced an indentation results folder (model, material, receptors, experiments)."""
-    import hashlib
-    from importlib import metadata
-    from pathlib import Path
-
-    folder = Path(model_dir).resolve()
-    info_file = folder / "model.json"
-    try:
-        version = metadata.version("fingertip-fem")
-    except metadata.PackageNotFoundError:
-        version = None
-    mat = model.material
-    nus = set(mat.nu.values())
-    return {"format": RUN_FORMAT, "package": "fingertip-fem", "version": version,
-            "model": {"folder": str(folder), "dim": model.dim, "preset": info.get("preset"),
-                      "model_json_sha256": hashlib.sha256(info_file.read_bytes()).hexdigest()
-                      if info_file.is_file() else None,
-                      "diameter_mm": info.get("params", {}).get("diameter_mm"), "dofs": int(model.ndof)},
-            "material": mat.code, "E_MPa": {str(k): v for k, v in sorted(mat.E_MPa.items())},
-            "nu": nus.pop() if len(nus) == 1 else {str(k): v for k, v in sorted(mat.nu.items())},
-            "receptors": {"depths_mm": np.unique(grid.depth_mm).tolist(),
-                          "spacing_mm": float(rc.get("spacing_mm", 1.0)),
-                          "line": None if line is None else ["xyz"[line[0]], line[1]], "measures": list(measures),
-                          "sites": len(grid.sites_mm), "points": len(grid.points_mm),
-                          "site_column": "site: id of the surface site (row of sites_mm), the same in every "
-                                         "step, position and experiment of this folder"},
-            "experiments": experiments}
-
-
-def _width_mm(res, ind, x, dim):
-    if dim == 2:
-        return res.contact_area_mm2
-    v = (x[res.active] @ ind.e2) if res.active.any() else np.zeros(1)
-    return float(v.max() - v.min())
-
-
-def _write_run(folder, name, ind, steps, cm, sn, sampler, measures, model, pvd, plots):
-    import csv
-
-    x3 = np.zeros((len(sn.x), 3))
-    x3[:, :model.dim] = sn.x
-    rows, surf, rec = [], [], []
-    for i, (off, r) in enumerate(steps):
-        vals = sampler.measures(r.observed, measures)
-        rows.append({"step": i, "offset_x_mm": off[0], "offset_z_mm": off[2],
-                     "depth_mm": float(r.depth_mm.max()), "force_N": r.total_force_N,
-                     **{f"force_part{k}_N": f for k, f in enumerate(r.part_force_N) if len(r.depth_mm) > 1},
-                     "contact_area_mm2": r.contact_area_mm2, "contact_width_mm": _width_mm(r, ind, x3, model.dim),
-                     "max_pressure_MPa": r.max_pressure_MPa, "penetration_mm": r.kkt["penetration_mm"],
-                     "tensile_N": r.kkt["tensile_N"], "complementarity_Nmm": r.kkt["complementarity_Nmm"],
-                     "kkt_ok": r.kkt["ok"]})
-        for j in range(len(sn.x)):
-            surf.append([i, *x3[j], r.deflection_mm[j], r.pressure_MPa[j], r.force_N[j]])
-        pts = np.zeros((len(sampler.grid.points_mm), 3))
-        pts[:, :model.dim] = sampler.grid.points_mm
-        for j in range(len(pts)):
-            rec.append([i, sampler.grid.site[j], *pts[j], sampler.grid.depth_mm[j], *(vals[m][j] for m in measures)])
-    _csv(folder / f"{name}.csv", list(rows[0]), [list(r.values()) for r in rows], csv)
-    _csv(folder / f"{name}_surface.csv", ["step", "x_mm", "y_mm", "z_mm", "deflection_mm", "pressure_MPa",
-                                          "force_N"], surf, csv)
-    _csv(folder / f"{name}_receptors.csv", ["step", "site", "x_mm", "y_mm", "z_mm", "depth_mm", *measures], rec, csv)
-    if pvd:
-        from fem.export import write_vtu
-
-        comp = cm.compliance(ind.approach)
-        names = []
-        for i, (_, r) in enumerate(steps):
-            names.append(f"{name}_{i:03d}.vtu")
-            write_vtu(folder / names[-1], model.solution(comp.displacement(r.force_N)))
-        entries = "\n".join(f'    <DataSet timestep="{i}" file="{n}"/>' for i, n in enumerate(names))
-        (folder / f"{name}.pvd").write_text('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
-                                            f"  <Collection>\n{entries}\n  </Collection>\n</VTKFile>\n")
-    if plots:
-        _plots(folder, name, ind, steps, sn, x3, sampler, measures, rows)
-
-
-def _csv(path, header, rows, csv):
-    with open(path, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(header)
-        w.writerows([[f"{v:.9g}" if isinstance(v, float) else v for v in row] for row in rows])
-
-
-def _plots(folder, name, ind, steps, sn, x3, sampler, measures, rows):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    sweep = len({tuple(o) for o, _ in steps}) > 1
-    key = "offset_x_mm" if sweep and any(r["offset_x_mm"] for r in rows) else ("offset_z_mm" if sweep else "depth_mm")
-    fig, ax = plt.subplots(1, 2, figsize=(10, 4))
-    ax[0].plot([r[key] for r in rows], [r["force_N"] for r in rows], "o-")
-    ax[0].set(xlabel=key, ylabel="force_N", title=f"{name}: force")
-    ax[1].plot([r[key] for r in rows], [r["max_pressure_MPa"] for r in rows], "o-")
-    ax[1].set(xlabel=key, ylabel="max_pressure_MPa", title="max contact pressure")
-    fig.tight_layout()
-    fig.savefig(folder / f"{name}_force.png", dpi=110)
-    plt.close(fig)
-    # deflection and pressure across the indentor (nodes near its centre line), last step(s)
-    u = (x3 - ind.origin_mm) @ ind.e1
-    v = (x3 - ind.origin_mm) @ ind.e2
-    near = np.abs(u) <= max(0.5, np.sort(np.abs(u))[min(len(u) - 1, 50)])
-    order = np.argsort(v[near])
-    fig, ax = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
-    for i, (off, r) in enumerate(steps[-8:] if not sweep else steps[-1:]):
-        ax[0].plot(v[near][order], -r.deflection_mm[near][order], label=f"{r.depth_mm.max():.2f} mm")
-        ax[1].plot(v[near][order], r.pressure_MPa[near][order])
-    ax[0].set(ylabel="surface displacement along approach, mm (down -)", title=f"{name}: surface profile")
-    ax[0].legend(fontsize=7)
-    ax[1].set(xlabel="position across the indentor, mm", ylabel="pressure_MPa")
-    fig.tight_layout()
-    fig.savefig(folder / f"{name}_profile.png", dpi=110)
-    plt.close(fig)
-    # receptor measures: profile across the pad (last step) or against the sweep position
-    g = sampler.grid
-    fig, axes = plt.subplots(len(measures), 1, figsize=(8, 2.2 * len(measures)), sharex=True, squeeze=False)
-    site_x = np.pad(g.sites_mm, ((0, 0), (0, 3 - g.sites_mm.shape[1]))) - ind.origin_mm
-    site_u, site_v = site_x @ ind.e1, site_x @ ind.e2
-    # a pad grid in 3D: only the sites on the indentor's centre line (within 0.5 mm, or the nearest)
-    on_line = np.abs(site_u) <= max(0.5, np.abs(site_u).min() + 1e-9)
-    for m, a in zip(measures, axes[:, 0]):
-        for d in np.unique(g.depth_mm):
-            sel = (g.depth_mm == d) & on_line[g.site]
-            if sweep:
-                j = np.flatnonzero(sel)[np.argmin(np.abs(site_v[g.site[sel]]))]
-                vals = [sampler.measures(r.observed, [m])[m][j] for _, r in steps]
-                a.plot([r[key] for r in rows], vals, label=f"{d:g} mm")
-            else:
-                vals = sampler.measures(steps[-1][1].observed, [m])[m][sel]
-                o = np.argsort(site_v[g.site[sel]])
-                a.plot(site_v[g.site[sel]][o], vals[o], ".-", label=f"{d:g} mm")
-        a.set_ylabel(m, fontsize=8)
-        a.legend(fontsize=7)
-    axes[-1, 0].set_xlabel(key if sweep else "receptor site across the indentor (on its centre line), mm")
-    fig.tight_layout()
-    fig.savefig(folder / f"{name}_receptors.png", dpi=110)
-    plt.close(fig)
-    if sn.x.shape[1] == 3:          # contact pressure map of the last indentation, seen along the approach
-        r = steps[-1][1]
-        fig, ax = plt.subplots(figsize=(6, 5))
-        sc = ax.scatter(u, v, c=r.pressure_MPa, s=6, cmap="viridis")
-        ax.set(xlabel="along the indentor, mm", ylabel="across the indentor, mm", aspect="equal",
-               title=f"{name}: contact pressure, depth {r.depth_mm.max():.2f} mm")
-        fig.colorbar(sc, label="pressure_MPa")
-        fig.tight_layout()
-        fig.savefig(folder / f"{name}_pressure.png", dpi=110)
-        plt.close(fig)

@@ -21,7 +21,7 @@ def quadratic_cells(model) -> np.ndarray:
 
 
 def write_vtu(path, solution) -> None:
-    """Write `solution` (fem.solver.Solution) to a VTU file at `path`."""
+    """Write `solution` (fem.fields.Solution) to a VTU file at `path`."""
     import meshio
 
     model = solution.model

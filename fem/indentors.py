@@ -19,7 +19,7 @@ extruded along z: use orientation "parallel" so that bars, cylinders and steps r
     g = ind.gap(points, travel_mm=1.0)          # (n,) mm
     n = ind.normal(points)                      # (n, 3)
 
-Catalogue (SPEC.md section 4, thesis table 5.1): cylinders C1-C8, rectangular flats R1-R2,
+Catalogue (thesis 4.3-4.5, 6.2.3, 6.3.3 and table 5.1): cylinders C1-C8, rectangular flats R1-R2,
 steps 0-5, bars, aperiodic gratings, wedge, cone, punch, plate, sphere, ellipsoid, two points.
 """
 from __future__ import annotations

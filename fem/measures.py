@@ -1,4 +1,4 @@
-"""Strain and stress measures (SPEC section 5): one registry, names carry their units.
+"""Strain and stress measures (thesis tables 4.1-4.4): one registry, names carry their units.
 
 Every measure is a function of the displacement (n, 3) [mm], the strain tensor (n, 3, 3) and the
 stress tensor (n, 3, 3) [MPa] at n points (plane strain: eps_zz = 0, sigma_zz from Hooke's law).
@@ -92,6 +92,16 @@ def check_names(names) -> list[str]:
     if unknown:
         raise InputError(f"unknown measure(s) {unknown}; known: {', '.join(MEASURES)}")
     return names
+
+
+def base_measure(candidate: str) -> str:
+    """Registry name behind a candidate ('abs:strain_xy' -> 'strain_xy', the magnitude of a signed
+    measure); InputError if unknown."""
+    name = candidate[4:] if candidate.startswith("abs:") else candidate
+    if name not in MEASURES:
+        raise InputError(f"unknown measure '{candidate}': use a fem.measures name (e.g. sed_MPa, "
+                         f"max_compressive_strain) or abs:<name>; known: {', '.join(MEASURES)}")
+    return name
 
 
 def evaluate(names, state: State) -> dict[str, np.ndarray]:

@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from common.errors import InputError
+from fem.presets import FINGERTIP_PRESETS, make_shape
 
 N_LAYERS = 5
 #: Per-preset layer-3 thickness and bone offset (not in the thesis; the monkey section is too thin
@@ -36,7 +37,7 @@ PRESET_PARAMS = {
     "human": dict(layer3_mm=1.5, bone_offset_mm=1.0),
     "monkey": dict(layer3_mm=0.55, bone_offset_mm=0.15),
 }
-#: Middle-section width (mm) of each preset's sections (SPEC: human about 16, monkey about 8 mm wide;
+#: Middle-section width (mm) of each preset's sections (thesis 3.3.1: human about 16, monkey about 8 mm wide;
 #: the presets taper to 17.12 and 8.56 mm at the middle reference section).
 PRESET_MIDDLE_WIDTH_MM = {"human": 17.12, "monkey": 8.56}
 SIZED_PARAMS = ("layer3_mm", "bone_offset_mm")
@@ -298,7 +299,7 @@ class LayeredModel:
                             "vertical_up": [0.0, float(np.cos(a)), 0.0 - float(np.sin(a))]},
                 "volar": {"span_deg": p.volar_span_deg, "centre": [0, 1], "z_frac": [0.0, 1.0]},
                 "proximal": {"what": "flat proximal cut (end cap at z0), where the finger goes on",
-                             "fixed": "its core (layers 3-5), all displacements (fem.contact.HELD: the hand "
+                             "fixed": "its core (layers 3-5), all displacements (fem.modelfolder.HELD: the hand "
                                       "is held; the skin goes on)"},
                 **({"tip": {"what": "rounded distal tip: each shell closes in a dome beyond z1, free",
                             "dome_lengths_mm": self.derived["tip_lengths_mm"],
@@ -395,8 +396,6 @@ def preset_sections(preset: str, dz_mm: float = 1.0, n: int = 720):
     """Sections of the parametric fingertip between its proximal cut and the start of the tip.
 
     Returns (z (K,), [polygon (n, 2)], sha256 of the preset parameters)."""
-    from reconstruct.synthetic import make_shape
-
     shape = make_shape("fingertip", preset=preset, rod=False)
     z0 = shape.z_range_mm[0]
     z1 = shape.params["length"] - shape.params["cap"]       # start of the rounded tip
@@ -582,8 +581,6 @@ def model_from_args(source: str | None, preset: str | None, params: ModelParams,
             z_range_mm = body_z_range(z, polys, tip_width_frac)
     tip_mm = params.tip_mm
     if preset is not None and tip_mm is None:
-        from reconstruct.synthetic import FINGERTIP_PRESETS
-
         tip_mm = float(FINGERTIP_PRESETS[preset]["cap"])              # its ellipsoidal cap
     if z_range_mm is not None:
         lo, hi = z_range_mm

@@ -1,39 +1,16 @@
-"""Neural recordings for receptor analysis: the documented CSV and its validation.
+"""Neural recordings for receptor analysis: recorded discharge rates and their validation (the
+CSV format is read and written by fem.measured).
 
-One row per recorded indentation (thesis 4.5: a spatial response profile is the discharge rate
-of one afferent plotted against the stimulus position):
-
-    # lines starting with '#' are comments (say where the data come from)
-    stimulus,position_mm,rate_ips,unit,orientation
-    grating_0.5,-21.4,3.0,SA1-a,parallel
-    grating_0.5,-21.2,4.5,SA1-a,parallel
-
-- `stimulus` (required): the experiment name of the indentation run it is compared with (the
-  `<name>.csv` / `<name>_receptors.csv` files `pipeline.py indent` writes).
-- `position_mm` (required): the stimulus offset in the same coordinate as the run's sweep
-  (`offset_x_mm`, or `offset_z_mm` for a sweep along z).
-- `rate_ips` (required; `rate_imp_s` is accepted too): discharge rate in impulses per second, >= 0.
-- `unit` (optional): afferent id; each unit gets its own fit (default: one unit "unit").
-- `orientation` (optional): bar orientation, `parallel` or `perpendicular` to the finger axis
-  (free text is kept); a file holding several orientations must be narrowed to one.
-
-Bad input (missing columns, empty or NaN rates, negative rates, non-numeric positions) raises
-`common.errors.InputError` with a one-line message naming the file and line.
+A spatial response profile is the discharge rate of one afferent plotted against the stimulus
+position (thesis 4.5); one entry per recorded indentation.
 """
 from __future__ import annotations
 
-import csv
-import math
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from common.errors import InputError
-
-REQUIRED = ("stimulus", "position_mm", "rate_ips")
-OPTIONAL = ("unit", "orientation")
-RATE_ALIASES = ("rate_ips", "rate_imp_s")
 
 
 @dataclass(frozen=True)
@@ -95,51 +72,3 @@ def make_neural(stimulus, position_mm, rate_ips, unit=None, orientation=None, so
         raise InputError(f"neural data {source}: position_mm is NaN in row {int(np.flatnonzero(~np.isfinite(pos))[0]) + 1}")
     obj = lambda v, default: np.array([default] * n if v is None else [str(s) for s in v], dtype=object)  # noqa: E731
     return NeuralData(obj(stimulus, ""), pos, rate, obj(unit, "unit"), obj(orientation, ""), source)
-
-
-def read_neural_csv(path) -> NeuralData:
-    """Read and validate the neural-data CSV (format in the module docstring)."""
-    path = Path(path)
-    try:
-        text = path.read_text()
-    except OSError as exc:
-        raise InputError(f"cannot read neural data '{path}': {exc.strerror or exc}") from None
-    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
-    if not lines:
-        raise InputError(f"neural data '{path}' is empty: need a header {','.join(REQUIRED)} and rows")
-    rows = list(csv.DictReader(lines))
-    header = [h.strip() for h in (csv.DictReader(lines).fieldnames or [])]
-    rate_col = next((c for c in RATE_ALIASES if c in header), None)
-    missing = [c for c in REQUIRED if c not in header and not (c == "rate_ips" and rate_col)]
-    if missing:
-        raise InputError(f"neural data '{path}' lacks column(s) {missing}: the header needs "
-                         f"{','.join(REQUIRED)} (optional {','.join(OPTIONAL)}), got {header}")
-    rows = [{(k or "").strip(): (v or "").strip() for k, v in r.items()} for r in rows]
-    if not rows:
-        raise InputError(f"neural data '{path}' has a header but no rows")
-    pos, rate = [], []
-    for i, r in enumerate(rows):
-        line = i + 2
-        for key, out in (("position_mm", pos), (rate_col, rate)):
-            try:
-                v = float(r[key]) if r[key] != "" else math.nan
-            except ValueError:
-                raise InputError(f"neural data '{path}' row {line}: {key} '{r[key]}' is not a number") from None
-            if math.isnan(v):
-                raise InputError(f"neural data '{path}' row {line}: {key} is empty or NaN: "
-                                 f"give a number or drop the row")
-            out.append(v)
-        if not r["stimulus"]:
-            raise InputError(f"neural data '{path}' row {line}: empty stimulus name")
-    opt = {c: [r.get(c, "") for r in rows] if c in header else None for c in OPTIONAL}
-    unit = [u or "unit" for u in opt["unit"]] if opt["unit"] else None
-    return make_neural([r["stimulus"] for r in rows], pos, rate, unit, opt["orientation"], source=f"'{path}'")
-
-
-def write_neural_csv(path, data: NeuralData, comment: str = "") -> None:
-    """Write NeuralData in the documented format (comment lines first)."""
-    lines = [f"# {c}" for c in comment.splitlines()] if comment else []
-    lines.append(",".join(REQUIRED + OPTIONAL))
-    for s, p, r, u, o in zip(data.stimulus, data.position_mm, data.rate_ips, data.unit, data.orientation):
-        lines.append(f"{s},{p:.6g},{r:.6g},{u},{o}")
-    Path(path).write_text("\n".join(lines) + "\n")

@@ -48,40 +48,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from common.errors import InputError
-
-
-class _SaddleSolver:
-    """Solve [[K, G^T], [G, -D]] x = b (sparse symmetric indefinite) with one step of iterative
-    refinement: the bone is 1e5 times stiffer than the soft layers, and without refinement the
-    solve's error floors Newton's residual decrease at ~1e-7 of the reactions. One PARDISO
-    instance is reused (pypardiso locates MKL once per instance)."""
-
-    def __init__(self):
-        try:
-            from pypardiso import PyPardisoSolver
-
-            from fem.biomech import _fast_pardiso
-
-            _fast_pardiso()
-            self._pardiso = PyPardisoSolver(mtype=-2)     # symmetric indefinite, reads the upper part
-        except ImportError:
-            self._pardiso = None
-
-    def __call__(self, A, b):
-        A = A.tocsr()
-        if self._pardiso is None:
-            from scipy.sparse.linalg import splu
-
-            lu = splu(A.tocsc())
-            x = lu.solve(b)
-            return x + lu.solve(b - A @ x)
-        upper = sp.triu(A, format="csr")
-        try:
-            self._pardiso.factorize(upper)
-            x = self._pardiso.solve(upper, b)
-            return x + self._pardiso.solve(upper, b - A @ x)
-        finally:
-            self._pardiso.free_memory(everything=True)
+from fem.linalg import solve_refined
 
 
 @dataclass
@@ -123,7 +90,6 @@ class NeoHookean:
         self.udofs = model.basis.element_dofs.T                                               # (M, nb*d)
         self.mu = model.mu
         self.ndof, self.npres = model.ndof, pb.N
-        self._solver = None
 
     # ------------------------------------------------------------------ kinematics and assembly
     def deformation_gradient(self, u, cells=slice(None)) -> np.ndarray:
@@ -289,8 +255,6 @@ class NeoHookean:
         with the consistent tangent predictor (the free DOFs follow), so that the loaded nodes
         never run ahead of their neighbours. Returns (u, residual norms after each iteration)."""
         hist, u = [], u.copy()
-        if self._solver is None:
-            self._solver = _SaddleSolver()
         for it in range(max_iter):
             f, K, G = self.tangent(u)
             r = (f - ext)[free]
@@ -307,7 +271,7 @@ class NeoHookean:
             if it == 0:
                 rhs_u = rhs_u - K[free][:, fixed] @ dfix
                 rhs_p = -(G[:, fixed] @ dfix)
-            du = self._solver(A, np.concatenate([rhs_u, rhs_p]))[:len(free)]
+            du = solve_refined(A, np.concatenate([rhs_u, rhs_p]))[:len(free)]
             if not np.all(np.isfinite(du)):
                 raise RuntimeError("singular tangent")
             if it == 0:
@@ -354,7 +318,7 @@ def line_load_model(model_dir, material=None, nu=None, position_mm=None, half_wi
     at least the nearest vertex). 3D: a wedge across the finger axis (thesis 6.2.1): the volar
     vertices within half_width_mm of z = z0 (default the middle of the volar z range) and within
     half_length_mm of x = x0 (default 0), at least the nearest vertex."""
-    from fem.contact import CONTACT_REGION, read_model
+    from fem.modelfolder import CONTACT_REGION, read_model
     from fem.solver import Model
 
     t, info = read_model(model_dir, material, nu)
@@ -386,7 +350,7 @@ def compare_line_load(model_dir, depths_mm=(0.05, 0.5, 1.0), material=None, nu=N
     if not depths.size or np.any(depths <= 0) or not step_mm > 0 or half_width_mm < 0 or half_length_mm < 0:
         raise InputError(f"line load: depths ({depths.tolist()}) and step ({step_mm}) must be > 0 mm, "
                          f"half width ({half_width_mm}) and half length ({half_length_mm}) >= 0 mm")
-    from fem.contact import CONTACT_REGION, held_regions
+    from fem.modelfolder import CONTACT_REGION, held_regions
 
     model, pos = line_load_model(model_dir, material, nu, position_mm, half_width_mm, half_length_mm)
     d = model.dim

@@ -16,9 +16,256 @@ def save(fig: Figure, path, dpi: int = 110) -> None:
 
 
 # --------------------------------------------------------------------------- indentation runs
+def indent_force_figure(name: str, key: str, x, force_N, max_pressure_MPa) -> Figure:
+    """Total force and peak contact pressure of one experiment against x (k,) (its column `key`:
+    depth or sweep offset, mm)."""
+    fig = Figure(figsize=(10, 4))
+    ax = fig.subplots(1, 2)
+    ax[0].plot(x, force_N, "o-")
+    ax[0].set(xlabel=key, ylabel="force_N", title=f"{name}: force")
+    ax[1].plot(x, max_pressure_MPa, "o-")
+    ax[1].set(xlabel=key, ylabel="max_pressure_MPa", title="max contact pressure")
+    return fig
+
+
+def indent_profile_figure(name: str, across_mm, results) -> Figure:
+    """Surface deflection and pressure across the indentor: across_mm (n,) positions of the
+    chosen surface nodes, in order; results: [(label, deflection (n,) mm, pressure (n,) MPa)]."""
+    fig = Figure(figsize=(8, 6))
+    ax = fig.subplots(2, 1, sharex=True)
+    for label, deflection, pressure in results:
+        ax[0].plot(across_mm, -deflection, label=label)
+        ax[1].plot(across_mm, pressure)
+    ax[0].set(ylabel="surface displacement along approach, mm (down -)", title=f"{name}: surface profile")
+    ax[0].legend(fontsize=7)
+    ax[1].set(xlabel="position across the indentor, mm", ylabel="pressure_MPa")
+    return fig
+
+
+def indent_receptors_figure(curves: dict, xlabel: str) -> Figure:
+    """Receptor measures, one panel per measure: curves {measure: [(label, x (k,), values (k,),
+    style)]} (a profile across the pad or against the sweep position)."""
+    fig = Figure(figsize=(8, 2.2 * len(curves)))
+    axes = fig.subplots(len(curves), 1, sharex=True, squeeze=False)
+    for (m, lines), a in zip(curves.items(), axes[:, 0]):
+        for label, x, vals, style in lines:
+            a.plot(x, vals, style, label=label)
+        a.set_ylabel(m, fontsize=8)
+        a.legend(fontsize=7)
+    axes[-1, 0].set_xlabel(xlabel)
+    return fig
+
+
+def indent_pressure_figure(name: str, along_mm, across_mm, pressure_MPa, depth_mm: float) -> Figure:
+    """Contact pressure map (3D) of one indentation seen along the approach: surface nodes at
+    (along, across) (m,) mm in the indentor's axes."""
+    fig = Figure(figsize=(6, 5))
+    ax = fig.subplots()
+    sc = ax.scatter(along_mm, across_mm, c=pressure_MPa, s=6, cmap="viridis")
+    ax.set(xlabel="along the indentor, mm", ylabel="across the indentor, mm", aspect="equal",
+           title=f"{name}: contact pressure, depth {depth_mm:.2f} mm")
+    fig.colorbar(sc, ax=ax, label="pressure_MPa")
+    return fig
+
 
 
 # --------------------------------------------------------------------------- biomechanics
+def _profile_pair(title: str):
+    """(Figure, [linear axes, log-distance axes]) for deflection profiles against distance."""
+    fig = Figure(figsize=(11, 4))
+    ax = fig.subplots(1, 2)
+    ax[0].set(xlabel="distance from the load, mm", ylabel="deflection, mm (into the finger +)", title=title)
+    ax[1].set(xlabel="distance from the load, mm (log)", title=title + " (log distance)")
+    ax[1].set_xscale("log")
+    return fig, ax
+
+
+def _plot_deflection(ax, distance_mm, deflection_mm, style="-", label=""):
+    """A profile on a (linear, log-distance) axes pair; the log axes leave out distance 0."""
+    pos = distance_mm > 0
+    ax[0].plot(distance_mm, deflection_mm, style, label=label)
+    ax[1].plot(distance_mm[pos], deflection_mm[pos], style, label=label)
+
+
+def _plot_measured(ax, data, label="data"):
+    """Measured profiles (fem.biomech.Profile) as crosses on every axes."""
+    for p in data:
+        pos = p.distance_mm > 0
+        for a in ax:
+            log = a.get_xscale() == "log"
+            a.plot(p.distance_mm[pos] if log else p.distance_mm, p.deflection_mm[pos] if log else p.deflection_mm,
+                   "kx", ms=5, label=f"{label} {p.depth_mm:g} mm")
+
+
+def _plot_idealised(ax, fits, reach_mm):
+    """The waterbed and beam curves {kind: fem.biomech.FreeLengthFit} from 0 to reach_mm."""
+    x = np.linspace(0, reach_mm, 400)
+    for kind, f in fits.items():
+        lab = f"{kind} L={f.length_mm:.3g} mm" + (" (at bound)" if f.at_bound else "")
+        _plot_deflection(ax, x, f(x), ":" if kind == "waterbed" else "--", lab)
+
+
+def _legends(ax, data=()):
+    """Add the measured profiles (if any) and small legends to every axes."""
+    _plot_measured(ax, data)
+    for a in ax:
+        a.legend(fontsize=6)
+
+
+def layer_study_figure(study, data=()) -> Figure:
+    """Thesis figure 6-10 from a fem.biomech.LayerStudy at its last depth: one row per varied layer,
+    its codes' profiles (linear and log distance), the measured profiles of that depth, and a line
+    where the layer matters most."""
+    k = len(study.depths_mm) - 1
+    depth = study.depths_mm[k]
+    fig = Figure(figsize=(11, 3.2 * len(study.layers)))
+    axes = fig.subplots(len(study.layers), 2, squeeze=False)
+    for row, (layer, codes) in zip(axes, study.layers.items()):
+        row[1].set_xscale("log")
+        for code in codes:
+            p = study.profiles[code][k]
+            _plot_deflection(row, p.distance_mm, p.deflection_mm, "-", code)
+        _plot_measured(row, [p for p in data if abs(p.depth_mm - depth) < 1e-9])
+        eff = next(e for e in study.effects if e.layer == layer and e.depth_mm == depth)
+        for a in row:
+            a.axvline(eff.most_affected_mm, color="0.6", lw=0.8)
+            a.legend(fontsize=7)
+        row[0].set(ylabel=f"layer {layer}: deflection, mm",
+                   title=f"layer {layer}, depth {depth:g} mm: most affected at {eff.most_affected_mm:.2f} mm")
+    axes[-1, 0].set_xlabel("distance from the load, mm")
+    axes[-1, 1].set_xlabel("distance from the load, mm (log)")
+    return fig
+
+
+def base_profiles_figure(title: str, profiles, fits, data=()) -> Figure:
+    """Model profiles (one per depth) with their waterbed and beam fits ({kind: FreeLengthFit} per
+    profile) and the measured profiles."""
+    fig, ax = _profile_pair(title)
+    for p, fd in zip(profiles, fits):
+        _plot_deflection(ax, p.distance_mm, p.deflection_mm, "-", f"model {p.depth_mm:g} mm")
+        _plot_idealised(ax, fd, p.distance_mm[-1])
+    _legends(ax, data)
+    return fig
+
+
+def deflection_fit_figure(data, fitted, start, base: str, fits) -> Figure:
+    """Measured profiles against the fitted material's and the base material's (one Profile per
+    measured depth each), with the waterbed and beam fits of the measured profiles."""
+    fig, ax = _profile_pair("deflection fit")
+    for p, b, s, fd in zip(data, fitted, start, fits):
+        _plot_deflection(ax, b.distance_mm, b.deflection_mm, "-", f"fit {p.depth_mm:g} mm")
+        _plot_deflection(ax, s.distance_mm, s.deflection_mm, "-.", f"{base} {p.depth_mm:g} mm")
+        _plot_idealised(ax, fd, p.distance_mm[-1])
+    _legends(ax, data)
+    return fig
+
+
+def force_scale_figure(scale) -> Figure:
+    """Measured forces and the scaled model forces of a fem.biomech_fit.ForceScale against depth."""
+    fig = Figure(figsize=(5, 4))
+    a = fig.subplots()
+    a.plot(scale.depths_mm, scale.measured_N, "kx", label="measured")
+    a.plot(scale.depths_mm, scale.scale * scale.model_N, "o-", label=f"model x {scale.scale:.3g}")
+    a.set(xlabel="depth_mm", ylabel="force_N", title="force scale")
+    a.legend()
+    return fig
+
+
+def cylinder_series_figure(s, dim: int) -> Figure:
+    """Contact area (2D: width), peak pressure and depth (or force) against cylinder diameter, one
+    line per load, of a fem.biomech.CylinderSeries (thesis figs. 4-25, 5-14)."""
+    force_unit = "N/mm" if dim == 2 else "N"
+    fig = Figure(figsize=(14, 4))
+    ax = fig.subplots(1, 3)
+    for j, v in enumerate(s.loads):
+        lab = f"{v:g} " + (force_unit if s.load_kind == "force" else "mm")
+        ax[0].plot(s.diameters_mm, s.contact_area_mm2[j], "o-", label=lab)
+        ax[1].plot(s.diameters_mm, s.max_pressure_MPa[j], "o-", label=lab)
+        ax[2].plot(s.diameters_mm, s.depth_mm[j] if s.load_kind == "force" else s.force_N[j], "o-", label=lab)
+    ax[0].set(xlabel="cylinder diameter, mm", ylabel="contact width, mm" if dim == 2 else "contact area, mm^2",
+              title=f"contact vs diameter at constant {s.load_kind}")
+    ax[1].set(xlabel="cylinder diameter, mm", ylabel="max contact pressure, MPa", title="peak pressure")
+    ax[2].set(xlabel="cylinder diameter, mm",
+              ylabel="depth, mm" if s.load_kind == "force" else f"force, {force_unit}",
+              title="depth needed" if s.load_kind == "force" else "force needed")
+    _legends(ax)
+    return fig
+
+
+def line_load_figure(c, large_deformation: bool) -> Figure:
+    """Surface deflection per depth and force against depth of a fem.nonlinear.LineLoadComparison
+    (linear; with large_deformation also the neo-Hookean solve)."""
+    fig = Figure(figsize=(12, 4))
+    ax = fig.subplots(1, 2)
+    for k, d in enumerate(c.depths_mm):
+        line = ax[0].plot(c.distance_mm, c.deflection_linear_mm[k], "-", label=f"linear {d:g} mm")[0]
+        if large_deformation:
+            ax[0].plot(c.distance_mm, c.deflection_nonlinear_mm[k], "--", color=line.get_color(),
+                       label=f"large deformation {d:g} mm")
+    ax[0].set(xlabel="undeformed distance from the load, mm", ylabel="deflection, mm (into the finger +)",
+              title="surface deflection under the line load")
+    ax[1].plot(c.depths_mm, c.force_linear_N, "o-", label="linear")
+    if large_deformation:
+        ax[1].plot(c.depths_mm, c.force_nonlinear_N, "s--", label="large deformation")
+    ax[1].set(xlabel="depth, mm", ylabel="force, " + ("N/mm" if c.dim == 2 else "N"), title="force vs depth")
+    _legends(ax)
+    return fig
+
+
 
 
 # --------------------------------------------------------------------------- receptor analysis
+def response_profiles_figure(runs, data, fits) -> Figure:
+    """Recorded rates (fem.neural.NeuralData of one unit) and the rates predicted by linear receptor
+    fits (fem.analysis.Fit) against stimulus position, one panel per stimulus; with one indentation
+    per stimulus (e.g. cylinders at constant force, thesis figure 4-26) one panel over the stimuli."""
+    stimuli = data.stimuli
+    if all(len(set(data.position_mm[data.stimulus == s])) == 1 for s in stimuli):
+        fig = Figure(figsize=(max(5, 0.8 * len(stimuli) + 2), 3.6))
+        ax = fig.subplots()
+        k = np.arange(len(stimuli))
+        ax.plot(k, [data.rate_ips[data.stimulus == s].mean() for s in stimuli], "kx", ms=9, mew=2, label="recorded")
+        for f in fits:
+            ax.plot(k, [f.predict(runs, s, data.position_mm[data.stimulus == s][:1])[0] for s in stimuli], "o-",
+                    label=f"{f.measure} (depth {f.depth_mm:g} mm)")
+        ax.set_xticks(k, stimuli)
+        ax.set(ylabel="rate, imp/s")
+        ax.legend(fontsize=7)
+        return fig
+    fig = Figure(figsize=(9, 2.4 * len(stimuli)))
+    axes = fig.subplots(len(stimuli), 1, squeeze=False)
+    for s, ax in zip(stimuli, axes[:, 0]):
+        part = data.only(stimuli=[s])
+        o = np.argsort(part.position_mm)
+        ax.plot(part.position_mm[o], part.rate_ips[o], "k-", lw=1.5, label="recorded")
+        for f in fits:
+            dense = np.linspace(part.position_mm.min(), part.position_mm.max(), 400)
+            ax.plot(dense, f.predict(runs, s, dense), lw=1,
+                    label=f"{f.measure} (depth {f.depth_mm:g} mm" + ("" if np.isnan(f.diameter_mm) else
+                                                                     f", D {f.diameter_mm:g} mm") + ")")
+        ax.set_title(s, fontsize=9)
+        ax.set_ylabel("rate, imp/s")
+    axes[0, 0].legend(fontsize=7)
+    axes[-1, 0].set_xlabel("stimulus position, mm")
+    return fig
+
+
+def response_scatter_figure(runs, data, fits) -> Figure:
+    """Recorded rate against the candidate measure at the receptor, one panel per fem.analysis.Fit,
+    with its line d = a S + b and a band of its RMS error."""
+    from fem.analysis import model_values
+
+    fig = Figure(figsize=(3.6 * len(fits), 3.4))
+    axes = fig.subplots(1, len(fits), squeeze=False)
+    for f, ax in zip(fits, axes[0]):
+        S = np.concatenate([model_values(runs, s, f.measure, f.depth_mm, f.diameter_mm,
+                                         data.position_mm[data.stimulus == s]) for s in data.stimuli])
+        d = np.concatenate([data.rate_ips[data.stimulus == s] for s in data.stimuli])
+        ax.plot(S, d, ".", ms=3)
+        line = np.linspace(S.min(), S.max(), 50)
+        ax.plot(line, f.a * line + f.b, "r-", lw=1)
+        ax.fill_between(line, f.a * line + f.b - f.rms_ips, f.a * line + f.b + f.rms_ips, color="r", alpha=0.15)
+        ax.set(xlabel=f"{f.measure} at {f.depth_mm:g} mm", ylabel="rate, imp/s",
+               title=f"RMS {f.rms_ips:.3g} imp/s (band), R^2 {f.r2:.3f}")
+        ax.title.set_fontsize(8)
+    return fig

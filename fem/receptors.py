@@ -1,7 +1,7 @@
 """Receptor grids: points at given depths below the undeformed skin surface, and their measures.
 
 Receptors sit 0.5-1.0 mm below the skin (Merkel cells 0.75 mm typical), about 1 mm apart
-(SPEC.md section 5). A grid is a set of surface sites (nodes of the contact region thinned to a
+(thesis 2.1.2). A grid is a set of surface sites (nodes of the contact region thinned to a
 spacing, or those along a line) each repeated at every depth along the inward surface normal.
 Fields are sampled in the element that holds each point (the solver's point operators), so
 nothing is averaged across a layer interface. A receptor within INTERFACE_SNAP_MM of a layer

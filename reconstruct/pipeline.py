@@ -184,7 +184,7 @@ def reconstruct(table: Turntable, spacing_mm=(0.5, 2.0), tol_mm: float = 0.02,
 
 
 def sections_document(rec: Reconstruction) -> dict:
-    """The sections.json contract (DESIGN.md)."""
+    """The sections.json document of a reconstruction: sections (mm, finger frame), calibration, views."""
     sc, fr, t = rec.frame.scale, rec.frame, rec.table
     return {
         "units": "mm",

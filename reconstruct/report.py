@@ -1,6 +1,8 @@
 """report.png: the diagnostics a user checks before trusting the sections (thesis figure 5-2 and more)."""
 from __future__ import annotations
 
+import textwrap
+
 import numpy as np
 
 
@@ -8,10 +10,7 @@ def write_report(rec, path) -> None:
     """Six panels: the volar view with its extracted border and the axis; its grey-level histogram
     with the Otsu level and the 50 % level; section width and height along z; sections inside their
     tangent polygons; all sections seen from the side; the summary."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     from reconstruct.silhouette import extract_borders
 
@@ -22,7 +21,8 @@ def write_report(rec, path) -> None:
         img = np.ascontiguousarray(img[::-1, ::-1])
     b = extract_borders(img, t.image_paths[i].name)
 
-    fig, ax = plt.subplots(2, 3, figsize=(15, 9.5))
+    fig = Figure(figsize=(15, 9.5))
+    ax = fig.subplots(2, 3)
     a = ax[0, 0]
     a.imshow(img, cmap="gray", vmin=0, vmax=255)
     rows = np.arange(len(b.left_px))
@@ -70,10 +70,7 @@ def write_report(rec, path) -> None:
 
     a = ax[1, 2]
     a.axis("off")
-    import textwrap
-
     text = "\n".join(textwrap.fill(line, 70, subsequent_indent=" " * 16) for line in rec.summary().splitlines())
     a.text(0, 1, text, family="monospace", fontsize=7, va="top")
     fig.tight_layout()
     fig.savefig(path, dpi=80)
-    plt.close(fig)

@@ -1,4 +1,9 @@
-"""Known shapes and an orthographic turntable renderer, for tests, benchmarks and sample_images/.
+"""Orthographic turntable renderer of a solid with known sections (fem.presets shapes), for tests,
+benchmarks and sample_images/, and the comparison of reconstructed sections with that solid.
+
+The solid is any object with `name`, `params` (JSON-ready dict), `z_range_mm`, `rod_radius_mm`,
+`extent_table(z_mm, directions)` and, for the comparison, `convex_section(z_mm, n)` and
+`volume_mm3(z_lo, z_hi)`.
 
 Geometry and conventions (the same ones `reconstruct` inverts):
 - Finger frame: rotation axis = z (proximal -> distal), volar pad towards +y, x lateral; the
@@ -16,7 +21,6 @@ Geometry and conventions (the same ones `reconstruct` inverts):
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import cv2
@@ -26,149 +30,6 @@ from tqdm import tqdm
 from common.errors import InputError
 from common.staging import staged_output, write_json
 
-SHAPES = ("fingertip", "sphere", "ellipsoid")
-
-#: Fingertip presets, mm. a: half width, b_volar / b_dorsal: half heights on the pad and nail
-#: sides, p_dorsal: superellipse exponent of the flattened nail side, centre: section centre
-#: relative to the rotation axis, length: body length (proximal cut to tip), cap: tip length.
-FINGERTIP_PRESETS = {
-    "human": dict(a=8.0, b_volar=6.5, b_dorsal=5.0, p_dorsal=3.0, centre=(0.6, 0.8),
-                  length=22.0, cap=7.0, taper=0.08, rod_radius=1.0),
-    "monkey": dict(a=4.0, b_volar=3.25, b_dorsal=2.5, p_dorsal=3.0, centre=(0.3, 0.4),
-                   length=11.0, cap=3.5, taper=0.08, rod_radius=0.5),
-}
-
-
-@dataclass
-class Shape:
-    """A solid with known axial sections. Subclasses give `_outline(z, t)`.
-
-    z_range_mm: (z0, z1) of the body; rod_radius_mm: mounting rod radius (0: none), the rod runs
-    along the axis from below the body into it.
-    """
-
-    name: str
-    z_range_mm: tuple[float, float]
-    rod_radius_mm: float = 0.0
-    params: dict = field(default_factory=dict)
-
-    def scale(self, z) -> np.ndarray:
-        """Section size factor in [0, 1] at z (array), 0 outside the body."""
-        raise NotImplementedError
-
-    def section(self, z_mm: float, n: int = 360) -> np.ndarray:
-        """(n, 2) counter-clockwise section polygon at z in the finger frame; (0, 2) outside."""
-        t = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
-        s = float(self.scale(np.array([z_mm]))[0])
-        if s <= 0:
-            return np.zeros((0, 2))
-        return self._outline(z_mm, s, t)
-
-    def convex_section(self, z_mm: float, n: int = 720) -> np.ndarray:
-        """Convex hull of the section, CCW: what tangent-envelope reconstruction can recover."""
-        from scipy.spatial import ConvexHull
-
-        pts = self.section(z_mm, n)
-        if len(pts) < 3:
-            return pts
-        return pts[ConvexHull(pts).vertices]
-
-    def area_mm2(self, z_mm: float, n: int = 720, convex: bool = True) -> float:
-        """Section area (of the convex hull by default) at z."""
-        p = self.convex_section(z_mm, n) if convex else self.section(z_mm, n)
-        if len(p) < 3:
-            return 0.0
-        x, y = p[:, 0], p[:, 1]
-        return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
-
-    def volume_mm3(self, z_lo: float, z_hi: float, convex: bool = True, n_z: int = 201) -> float:
-        """Volume between two axial positions (Simpson's rule on section areas)."""
-        from scipy.integrate import simpson
-
-        z = np.linspace(z_lo, z_hi, n_z)
-        return float(simpson([self.area_mm2(zi, convex=convex) for zi in z], x=z))
-
-    def extent_table(self, z_mm: np.ndarray, directions: np.ndarray, n: int = 720) -> np.ndarray:
-        """Support function h(z, n) of the body (rod included if it has one), mm.
-
-        z_mm: (m,); directions: (k, 2) unit vectors. Returns (m, k); -inf where nothing is at z.
-        The rod runs along the axis from far below the body to its middle.
-        """
-        h = np.full((len(z_mm), len(directions)), -np.inf)
-        t = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
-        for i, (z, s) in enumerate(zip(z_mm, self.scale(z_mm))):
-            if s > 0:
-                h[i] = (self._outline(z, s, t) @ directions.T).max(axis=0)
-        if self.rod_radius_mm > 0:
-            rod = z_mm < 0.5 * (self.z_range_mm[0] + self.z_range_mm[1])
-            h[rod] = np.maximum(h[rod], self.rod_radius_mm)
-        return h
-
-
-class Fingertip(Shape):
-    """Parametric fingertip: elliptic pad side, flattened (superellipse) nail side, section centre
-    off the rotation axis, slight taper along z, ellipsoidal distal cap; optional concave dorsal
-    groove (a nail-fold-like dent) that tangent-envelope reconstruction cannot see."""
-
-    def __init__(self, preset: str = "human", groove: bool = False):
-        if preset not in FINGERTIP_PRESETS:
-            raise InputError(f"unknown fingertip preset '{preset}': use one of {sorted(FINGERTIP_PRESETS)}")
-        p = dict(FINGERTIP_PRESETS[preset], preset=preset, groove=groove)
-        super().__init__("fingertip", (0.0, p["length"]), p["rod_radius"], p)
-
-    def scale(self, z):
-        p, z = self.params, np.asarray(z, float)
-        L, cap = p["length"], p["cap"]
-        body = (z >= 0) & (z <= L)
-        taper = 1.0 + p["taper"] * np.sin(np.pi * np.clip(z / L, 0, 1))
-        u = np.clip((z - (L - cap)) / cap, 0.0, 1.0)
-        return np.where(body, taper * np.sqrt(np.clip(1.0 - u**2, 0.0, None)), 0.0)
-
-    def _outline(self, z, s, t):
-        p = self.params
-        c, sn = np.cos(t), np.sin(t)
-        dorsal = sn < 0
-        e = 2.0 / np.where(dorsal, p["p_dorsal"], 2.0)
-        x = p["a"] * np.sign(c) * np.abs(c) ** e
-        y = np.where(dorsal, p["b_dorsal"], p["b_volar"]) * np.sign(sn) * np.abs(sn) ** e
-        if p["groove"]:
-            w = 0.2 * p["a"]
-            y = np.where(dorsal, y + 0.08 * p["b_dorsal"] * np.exp(-(x / w) ** 2), y)
-        return np.column_stack([s * x + p["centre"][0], s * y + p["centre"][1]])
-
-
-class Ellipsoid(Shape):
-    """Ellipsoid with semi-axes (a, b, c) along x, y, z, centred at (cx, cy, 0); a sphere if a=b=c."""
-
-    def __init__(self, name, a, b, c, centre=(0.0, 0.0), rod_radius=0.0):
-        super().__init__(name, (-c, c), rod_radius, dict(a=a, b=b, c=c, centre=centre))
-
-    def scale(self, z):
-        z = np.asarray(z, float) / self.params["c"]
-        return np.sqrt(np.clip(1.0 - z**2, 0.0, None)) * (np.abs(z) < 1)
-
-    def _outline(self, z, s, t):
-        p = self.params
-        return np.column_stack([s * p["a"] * np.cos(t) + p["centre"][0],
-                                s * p["b"] * np.sin(t) + p["centre"][1]])
-
-
-def make_shape(name: str, preset: str = "human", groove: bool = False, rod: bool = True) -> Shape:
-    """One of SHAPES. Sphere: R 7 mm, ellipsoid: 8 x 6 x 10 mm; both 0.5 mm off the axis."""
-    if name == "fingertip":
-        shape = Fingertip(preset, groove)
-    elif name == "sphere":
-        shape = Ellipsoid("sphere", 7.0, 7.0, 7.0, centre=(0.5, -0.3), rod_radius=1.0)
-    elif name == "ellipsoid":
-        shape = Ellipsoid("ellipsoid", 8.0, 6.0, 10.0, centre=(-0.4, 0.5), rod_radius=1.0)
-    else:
-        raise InputError(f"unknown shape '{name}': use one of {', '.join(SHAPES)}")
-    if not rod:
-        shape.rod_radius_mm = 0.0
-    return shape
-
-
-# ----------------------------------------------------------------------------- rendering
 BACKGROUND, OBJECT = 245.0, 25.0   # grey levels at full illumination
 
 
@@ -215,10 +76,11 @@ def _photograph(coverage, cam, blur_px, noise, vignetting, rng):
     return np.clip(np.rint(img), 0, 255).astype(np.uint8)
 
 
-def render_turntable(shape: Shape, out_dir, n_views: int = 100, span_deg: float = 360.0,
+def render_turntable(shape, out_dir, n_views: int = 100, span_deg: float = 360.0,
                      size_px=(700, 900), mm_per_px: float = 0.04, aspect: float = 1.0,
                      blur_px: float = 0.8, noise: float = 2.0, vignetting: float = 0.25,
-                     axis_offset_px: float = 0.0, tilt_deg: float = 0.0, seed: int = 0, template_diameter_mm: float = 12.7, progress: bool = False,
+                     axis_offset_px: float = 0.0, tilt_deg: float = 0.0, seed: int = 0,
+                     template_diameter_mm: float = 12.7, progress: bool = False,
                      image_format: str = "png") -> dict:
     """Render a turntable folder: `view_XXX.XXdeg.png` images, `calibration.png` (a dark disc of
     `template_diameter_mm` on its shaft), `turntable.toml`, and `truth.json`.
@@ -273,16 +135,9 @@ def render_turntable(shape: Shape, out_dir, n_views: int = 100, span_deg: float 
     return truth
 
 
-def load_truth_shape(folder) -> tuple[Shape, dict]:
-    """The Shape and truth dictionary behind a rendered folder (reads truth.json)."""
-    truth = json.loads((Path(folder) / "truth.json").read_text())
-    p = truth["params"]
-    if truth["shape"] == "fingertip":
-        shape = Fingertip(p["preset"], p["groove"])
-    else:
-        shape = Ellipsoid(truth["shape"], p["a"], p["b"], p["c"], tuple(p["centre"]))
-    shape.rod_radius_mm = truth["rod_radius_mm"]
-    return shape, truth
+def load_truth(folder) -> dict:
+    """The truth dictionary render_turntable wrote to a rendered folder (truth.json)."""
+    return json.loads((Path(folder) / "truth.json").read_text())
 
 
 def point_polygon_distance(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
@@ -296,13 +151,13 @@ def point_polygon_distance(points: np.ndarray, polygon: np.ndarray) -> np.ndarra
     return np.sqrt((d * d).sum(-1)).min(axis=1)
 
 
-def compare_to_truth(doc: dict, folder) -> dict:
-    """Errors of a sections.json document against the truth behind a rendered folder.
+def compare_to_truth(doc: dict, shape, truth: dict) -> dict:
+    """Errors of a sections.json document against the shape a folder was rendered from.
 
-    Distances from reconstructed section points to the true convex section, in mm and px, and
-    the volume of the lofted sections vs the true (convex) volume over the same z range.
+    truth: that folder's truth dictionary (load_truth). Distances from reconstructed section points
+    to the true convex section, in mm and px, and the volume of the lofted sections vs the true
+    (convex) volume over the same z range.
     """
-    shape, truth = load_truth_shape(folder)
     shift = doc["calibration"]["z_offset_mm"] - truth["z0_s_mm"]     # shape z = z + shift
     dists = []
     for sec in doc["sections"]:

@@ -1,6 +1,6 @@
 """Load a turntable folder: images, view angles, calibration template, manifest; validate up front.
 
-Folder contract (DESIGN.md): images (png/tif/tiff/jpg/jpeg/bmp) of one size; `calibration.*`
+Folder contract: images (png/tif/tiff/jpg/jpeg/bmp) of one size; `calibration.*`
 (template image); optional `turntable.toml` with `start_deg` + `step_deg` (angle of the i-th
 view in sorted name order) or an `[angles]` table (file name -> degrees),
 `template_diameter_mm` (default 12.7), `axis` ("vertical" or "horizontal"), `volar_view_deg`

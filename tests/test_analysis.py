@@ -9,10 +9,12 @@ import numpy as np
 import pytest
 
 import pipeline
-from fem.analysis import (IndentRun, Probe2D, as_runs, fit_measure, gap_analysis, goodness, linear_fit, model_values,
-                          point_load_field, rank_candidates, rank_per_stimulus, receptive_field,
-                          settling_separation, two_point_curves)
-from fem.neural import make_neural, read_neural_csv, write_neural_csv
+from fem.analysis import as_runs, fit_measure, goodness, linear_fit, model_values, rank_candidates, rank_per_stimulus
+from fem.measured import read_neural_csv, write_neural_csv
+from fem.neural import make_neural
+from fem.probes import (Probe2D, gap_analysis, point_load_field, receptive_field, settling_separation,
+                        two_point_curves)
+from fem.runfolder import IndentRun
 from common.errors import InputError
 
 SCENE = """[receptors]
@@ -230,6 +232,7 @@ def test_receptor_sites_come_from_the_site_column(models, tmp_path):
 
 
 def test_run_json_gives_diameter_and_sweep_axis_outside_the_model_folder(models, tmp_path):
+    import json
     import shutil
 
     folder = tmp_path / "moved"
@@ -239,26 +242,30 @@ def test_run_json_gives_diameter_and_sweep_axis_outside_the_model_folder(models,
     (folder / "run.json").write_text("{")
     with pytest.raises(InputError, match="not a run.json"):
         IndentRun(folder)
-    (folder / "run.json").unlink()
+    record = json.loads((models[16] / "sweeps" / "run.json").read_text())
+    record["model"]["diameter_mm"] = None
+    (folder / "run.json").write_text(json.dumps(record))
     assert IndentRun(folder).diameter_mm is None
     with pytest.raises(InputError, match="--diameters"):
         as_runs([IndentRun(models[8] / "sweeps"), IndentRun(folder)])
 
 
-def test_folders_without_site_column_and_run_json_still_load(models, tmp_path):
+def test_folders_without_run_json_or_site_column_are_refused(models, tmp_path):
+    """Run folders of the 0.1.0 package (no run.json, no site column) are one InputError asking
+    to re-run `pipeline.py indent`."""
     import shutil
 
     folder = tmp_path / "models" / "cyl8" / "old"
     folder.parent.mkdir(parents=True)
     shutil.copy(models[8] / "model.json", folder.parent / "model.json")
     shutil.copytree(models[8] / "sweeps", folder)
-    (folder / "run.json").unlink()
     _rewrite_receptors(folder, "grating", lambda h, rows: ([c for c in h if c != "site"],
                                                            [r[:1] + r[2:] for r in rows]))
-    old, ref = IndentRun(folder), IndentRun(models[8] / "sweeps")
-    assert old.diameter_mm == 8.0 and old.sweep_axis("grating") is None
-    np.testing.assert_array_equal(old.profile("grating", "sed_MPa", 0.75, 1.0)[1],
-                                  ref.profile("grating", "sed_MPa", 0.75, 1.0)[1])
+    with pytest.raises(InputError, match="re-run `pipeline.py indent`"):
+        IndentRun(folder).profile("grating", "sed_MPa", 0.75, 1.0)
+    (folder / "run.json").unlink()
+    with pytest.raises(InputError, match="re-run `pipeline.py indent`"):
+        IndentRun(folder)
 
 
 # ----------------------------------------------------------------------------- spatial vs population

@@ -1,12 +1,13 @@
-"""Biomechanical verification (issue 7): waterbed and beam curves, deflection profiles under a
+"""Biomechanical verification (thesis 4.7, 6.2): waterbed and beam curves, deflection profiles under a
 line load, the layer study, fitting layer moduli and the force scale; bad input."""
 import numpy as np
 import pytest
 
 import pipeline
-from fem.biomech import (DeflectionExperiment, Profile, code_of, cylinder_series, fit_force_scale,
-                         fit_free_length, fit_material, layer_study, parse_code, read_deflection_csv,
-                         read_force_csv, side_profile)
+from fem.biomech import (DeflectionExperiment, Profile, code_of, cylinder_series, fit_free_length, layer_study,
+                         parse_code, side_profile)
+from fem.biomech_fit import fit_force_scale, fit_material
+from fem.measured import read_deflection_csv, read_force_csv
 from fem.reference import WATERBED_PER_BEAM, beam_deflection, waterbed_deflection
 from common.errors import InputError
 

@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 import pipeline
-from fem.contact import ContactModel, open_model
+from fem.contact import ContactModel
+from fem.modelfolder import open_model
 from fem.indentors import make_indentor
 
 
@@ -92,18 +93,18 @@ def test_thesis_trend_cylinders_at_constant_force(cyl8):
 def test_shipped_scenes_are_valid():
     from pathlib import Path
 
-    from fem.contact import load_scene, parse_sweep, parse_values
     from fem.indentors import shapes_for
+    from fem.scene import load_scene
 
     scenes = sorted((Path(pipeline.__file__).parent / "scenes").glob("*.toml"))
     assert len(scenes) >= 8
     for path in scenes:
-        for exp in load_scene(path)["experiment"]:
-            shapes_for(exp["indentor"])
-            if "depth_mm" in exp:
-                assert parse_values(exp["depth_mm"]).min() > 0
-            if "sweep" in exp:
-                assert len(parse_sweep(exp["sweep"])[1]) > 1
+        for exp in load_scene(path).experiments:
+            shapes_for(exp.indentor)
+            if exp.depth_mm is not None:
+                assert min(exp.depth_mm) > 0
+            if exp.sweep is not None:
+                assert len(exp.sweep[1]) > 1
 
 
 @pytest.mark.parametrize("scene", ["bars", "two_point"])

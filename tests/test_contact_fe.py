@@ -134,7 +134,7 @@ def test_hertz_sphere_on_quarter_block():
     the computed force (local quantities) within 3 %. The force at the given depth is above Hertz
     (+6.7 % here) because the fixed bottom at 8 mm makes the nearly incompressible block stiffer
     than a half-space; on a 40 mm block the force is within 0.6 % of Hertz
-    (`benchmarks/contact_bench.py hertz`, README)."""
+    (`benchmarks/contact_bench.py hertz`, docs/verification.md)."""
     nu = 0.49
     model, system = quarter_block(nu, 0.125, 8.0)
     cm = ContactModel.from_fe(model, system, "top")

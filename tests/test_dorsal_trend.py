@@ -2,11 +2,11 @@
 entire dorsal half moves vertically less than 10 % of the maximum. Dorsal half: the outer surface
 below the section centroid (as in benchmarks/contact_bench.py dorsal).
 
-Human preset: it holds because the proximal cut's core is held (fem.contact.HELD); with that cut
+Human preset: it holds because the proximal cut's core is held (fem.modelfolder.HELD); with that cut
 free this model gives 10.6 % (0.5 mm model 11.5 %), the largest motion on the free proximal cut,
 against the thesis's statement that deformation fades faster proximally than distally.
 
-Monkey preset: it does not hold (README, Boundary conditions): 11-14 % on the lateral flank next
+Monkey preset: it does not hold (docs/verification.md): 11-14 % on the lateral flank next
 to the load. The preset is the human one at half scale with the same 1.5 mm skin, so 2 mm is as
 deep relative to its 3.5 mm volar half-height as 4 mm on the human; at 1 mm, the human's 2 mm
 relative to the section, it holds. The test pins both so that a change to either is noticed."""
@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 import pipeline
-from fem.contact import ContactModel, open_model
+from fem.contact import ContactModel
+from fem.modelfolder import open_model
 from fem.indentors import make_indentor
 from fem.model import model_from_args, params_for
 
@@ -57,7 +58,7 @@ def test_monkey_dorsal_half_is_under_10_percent_at_1_mm_but_not_at_2_mm(tmp_path
     (surface2, _, proximal, distal), (surface1, _, _, _) = _dorsal_ratios(tmp_path, "monkey", [2.0, 1.0])
     assert 0.10 < surface2 < 0.17, surface2                    # measured 11.8-13.6 % (1.0 mm meshes)
     assert 0.03 < surface1 < 0.10, surface1                    # measured 6.1 %
-    # Only the proximal cut's core is held (its skin goes on proximally, fem.contact.HELD): on this
+    # Only the proximal cut's core is held (its skin goes on proximally, fem.modelfolder.HELD): on this
     # short body, the load 3.75 mm from the cut, the cut's skin moves more than the distal cut
     # (11.5 % against 8.3 %), against the thesis's order, which the human model keeps.
     assert 0.05 < proximal < 0.15 and 0.05 < distal < 0.15, (proximal, distal)

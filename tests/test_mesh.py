@@ -195,9 +195,9 @@ def test_monkey_size_sections_json_meshes_with_size_defaults(built, tmp_path, mo
 
 
 def test_receptor_sites_skip_the_end_cuts(built):
-    """Receptor sites come from the volar nodes off the end cuts (fem.contact.receptor_surface), so
+    """Receptor sites come from the volar nodes off the end cuts (fem.modelfolder.receptor_surface), so
     every receptor point lies in the mesh, at least a node spacing inside the cut planes."""
-    from fem.contact import read_model, receptor_surface
+    from fem.modelfolder import read_model, receptor_surface
     from fem.receptors import ReceptorSampler, receptor_grid
 
     model, _ = read_model(built[0])
@@ -216,7 +216,7 @@ def test_receptor_sites_skip_the_end_cuts(built):
 def test_bar_along_the_axis_presses_the_skin_of_the_proximal_cut(built, tmp_path):
     """Only the proximal cut's core (layers 3-5) is held, so a bar as long as the finger indents
     the cut's skin instead of stopping at a fixed rim (it did while the whole cut was held)."""
-    from fem.contact import held_regions, read_model
+    from fem.modelfolder import held_regions, read_model
 
     model, _ = read_model(built[0])
     assert "proximal_core" in held_regions(model) and "proximal" not in held_regions(model)
@@ -238,12 +238,15 @@ def test_3d_scenes_run_on_the_preset(built, tmp_path, scene):
     bars, cylinders, line_load and steps stopped at its held rim); all KKT checks pass."""
     from pathlib import Path
 
-    from fem.contact import load_scene, run_scene
+    from dataclasses import replace
 
-    spec = load_scene(Path(pipeline.__file__).parent / "scenes" / f"{scene}.toml")
-    spec["output"] = {"plots": False, "pvd": False}
-    run_scene(built[0], tmp_path / scene, spec, progress=False)
-    for name in [str(e.get("name", f"experiment{k + 1}")) for k, e in enumerate(spec["experiment"])]:
+    from commands.indent import indent_folder
+    from fem.scene import Output, load_scene
+
+    spec = replace(load_scene(Path(pipeline.__file__).parent / "scenes" / f"{scene}.toml"),
+                   output=Output(plots=False, pvd=False))
+    indent_folder(built[0], tmp_path / scene, spec, progress=False)
+    for name in [e.name for e in spec.experiments]:
         text = (tmp_path / scene / f"{name}.csv").read_text().splitlines()
         header = text[0].split(",")
         rows = [dict(zip(header, r.split(","))) for r in text[1:]]

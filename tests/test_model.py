@@ -60,7 +60,7 @@ def test_presets_have_the_thesis_sizes_and_nested_outward_shells():
 
 
 def test_outer_volume_matches_the_parametric_fingertip():
-    from reconstruct.synthetic import make_shape
+    from fem.presets import make_shape
 
     m = model_from_args(None, "monkey", params_for("monkey"))
     shape = make_shape("fingertip", preset="monkey", rod=False)
@@ -145,7 +145,7 @@ def test_tilted_distal_end_up_the_top_is_the_flat_cut_rim_or_the_rounded_pad():
     rim of a flat distal cut, but on the pad of a rounded tip, where the tip has turned 30 deg."""
     from dataclasses import replace
 
-    from fem.contact import scene_position
+    from fem.experiments import scene_position
     from fem.indentors import approach_direction
 
     place = {"approach": approach_direction(-30.0)}
@@ -231,7 +231,7 @@ def test_other_bad_options_are_refused(tmp_path, capsys):
 
 
 def test_sections_json_with_the_tip_is_cut_before_the_rounded_tip(tmp_path):
-    from reconstruct.synthetic import make_shape
+    from fem.presets import make_shape
 
     shape = make_shape("fingertip", preset="human", rod=False)
     z = np.arange(0.0, 21.75, 0.5)                      # body 0-15 mm, rounded tip 15-22 mm

@@ -1,6 +1,6 @@
 """Image stage on rendered turntable sets of known shapes (reconstruct.synthetic).
 
-Acceptance (issue 2): mean distance from reconstructed section points to the true convex section
+Acceptance: mean distance from reconstructed section points to the true convex section
 <= 0.25 px and max <= 1 px for convex shapes with 100 views, with and without axis offset/tilt,
 blur (PSF sigma 0.8 px) and noise; surface watertight; volume within 1 % of truth.
 Images here are 360 x 460 px at 0.08 mm/px (a human fingertip is ~200 px wide) to keep tests fast;
@@ -14,7 +14,8 @@ import trimesh
 
 import pipeline
 from reconstruct.pipeline import reconstruct, sections_document
-from reconstruct.synthetic import compare_to_truth, make_shape, render_turntable
+from fem.presets import make_shape, shape_from_truth
+from reconstruct.synthetic import compare_to_truth, load_truth, render_turntable
 from reconstruct.turntable import load_turntable
 
 SMALL = dict(size_px=(360, 460), mm_per_px=0.08, blur_px=0.8, noise=2.0, vignetting=0.25)
@@ -48,7 +49,8 @@ def _run(folder):
     if folder not in _RUNS:
         rec = reconstruct(load_turntable(folder))
         doc = sections_document(rec)
-        _RUNS[folder] = rec, doc, compare_to_truth(doc, folder)
+        truth = load_truth(folder)
+        _RUNS[folder] = rec, doc, compare_to_truth(doc, shape_from_truth(truth), truth)
     return _RUNS[folder]
 
 

@@ -5,7 +5,8 @@ import meshio
 import numpy as np
 
 import pipeline
-from reconstruct.synthetic import Fingertip, render_turntable
+from fem.presets import Fingertip
+from reconstruct.synthetic import render_turntable
 
 
 def test_run_chains_reconstruct_and_mesh(tmp_path, capsys):

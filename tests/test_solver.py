@@ -344,7 +344,7 @@ def test_prescribed_array_form_and_point_forces(block3d):
 
 
 def test_refinement_only_when_asked_and_agrees(monkeypatch, block3d):
-    """PARDISO's own refinement is off; _Factor refines on K_ff only for columns above its
+    """PARDISO's own refinement is off; SaddleFactor refines on K_ff only for columns above its
     tolerance, and raises the tolerance when a step does not help."""
     system = block3d.system({"ymin": 0.0})
     F = np.random.default_rng(2).normal(size=(block3d.ndof, 5)) * 1e-4

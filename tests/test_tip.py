@@ -50,18 +50,21 @@ def force_displacement(built, tmp_path_factory):
     """The shipped scene on the tilted rounded monkey, plus a 3 mm punch: {name: (rows, surface)}."""
     from pathlib import Path
 
-    from fem.contact import load_scene, run_scene
+    from dataclasses import replace
+
+    from commands.indent import indent_folder
+    from fem.scene import Experiment, Output, load_scene
 
     spec = load_scene(Path(pipeline.__file__).parent / "scenes" / "force_displacement.toml")
-    spec["output"] = {"plots": False, "pvd": False}
-    spec["experiment"].append({"name": "punch3", "indentor": "punch:3", "position_mm": "top",
-                               "depth_mm": "0.25:2:0.25"})
+    punch = Experiment.from_dict({"name": "punch3", "indentor": "punch:3", "position_mm": "top",
+                                  "depth_mm": "0.25:2:0.25"})
+    spec = replace(spec, output=Output(plots=False, pvd=False), experiments=(*spec.experiments, punch))
     out = tmp_path_factory.mktemp("fd")
-    run_scene(built, out, spec, progress=False)
-    return {e["name"]: (np.genfromtxt(out / f"{e['name']}.csv", delimiter=",", names=True, dtype=None,
-                                      encoding="utf-8"),
-                        np.genfromtxt(out / f"{e['name']}_surface.csv", delimiter=",", names=True))
-            for e in spec["experiment"]}
+    indent_folder(built, out, spec, progress=False)
+    return {e.name: (np.genfromtxt(out / f"{e.name}.csv", delimiter=",", names=True, dtype=None,
+                                   encoding="utf-8"),
+                     np.genfromtxt(out / f"{e.name}_surface.csv", delimiter=",", names=True))
+            for e in spec.experiments}
 
 
 @pytest.mark.slow
