@@ -12,6 +12,7 @@ from pathlib import Path
 
 from common.errors import InputError
 from common.staging import staged_output
+from fem import plots
 from fem.experiments import run_experiments
 from fem.modelfolder import read_model
 from fem.runfolder import write_run
@@ -55,7 +56,7 @@ def scene_of_flags(indentor, orientation="parallel", position=None, incline=None
 
 def indent_folder(model_dir, out_dir, scene: Scene, progress: bool = True) -> str:
     """Run every experiment of a scene on a model folder and write the run folder atomically into
-    out_dir (CSV, run.json, PNG and PVD as the scene says). Placement warnings go to stderr;
+    out_dir (CSV, run.json, and PNG and PVD as the scene says). Placement warnings go to stderr;
     progress: report the factorisation and each experiment on stderr. Returns the summary text."""
     t_start = time.perf_counter()
     model, info = read_model(model_dir, scene.material, scene.nu)
@@ -64,7 +65,11 @@ def indent_folder(model_dir, out_dir, scene: Scene, progress: bool = True) -> st
     for warning in run.warnings:
         print(f"warning: {warning}", file=sys.stderr)
     with staged_output(out_dir) as tmp:
-        write_run(tmp, model_dir, run)
+        tables = write_run(tmp, model_dir, run)
+        if scene.output.plots:
+            for e in run.experiments:
+                for name, fig in plots.indent_figures(e, run, tables[e.name]).items():
+                    plots.save(fig, tmp / name)
     total = time.perf_counter() - t_start
     lines = [(f"indentation results in {out_dir} ({total:.1f} s; model {model.ndof} DOFs, "
               f"{len(run.surface.nodes)} contact candidates, {len(run.grid.points_mm)} receptor points)")]

@@ -20,7 +20,7 @@ Candidates are `fem.measures` names, or `abs:<name>` for the magnitude of a sign
 (`abs:strain_xy` is the thesis's "absolute shear strain"). `THESIS_CANDIDATES` is the list of
 thesis tables 4.1-4.4.
 
-    runs = {8.0: IndentRun("out/cyl8/gratings"), 16.0: IndentRun("out/cyl16/gratings")}
+    runs = {8.0: IndentRun("out/cyl8/gratings"), 16.0: IndentRun("out/cyl16/gratings")}   # fem.runfolder
     neural = read_neural_csv("data/sa1_gratings.csv")          # fem.measured
     table = rank_candidates(runs, neural)                      # combined data, best first
     fit = fit_measure(runs, neural, "sed_MPa", fit_stimuli=["step1"])
@@ -36,13 +36,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fem.measures import MEASURES, base_measure
-from fem.runfolder import IndentRun
 from fem.neural import NeuralData
 from common.errors import InputError
 
 DEPTH_RANGE_MM = (0.5, 1.0)
-RECEPTOR_COLUMNS = ("step", "site", "x_mm", "y_mm", "z_mm", "depth_mm")
-"""Columns of `<name>_receptors.csv` that are not measures."""
 DIAMETER_STEP_MM = 1.0
 THESIS_CANDIDATES = {
     "sed_MPa": "strain energy density",
@@ -129,11 +126,12 @@ class Fit:
 
 
 def as_runs(runs) -> dict:
-    """{diameter (nan for one run): IndentRun}; accepts one run, a list, or a dict."""
-    if isinstance(runs, IndentRun):
-        return {math.nan: runs}
+    """{diameter (nan for one run): run}; accepts one run (fem.runfolder.IndentRun or any object
+    with its reading methods), a list or tuple of runs, or a dict."""
     if isinstance(runs, dict):
         return dict(sorted(runs.items()))
+    if not isinstance(runs, (list, tuple)):
+        return {math.nan: runs}
     runs = list(runs)
     if len(runs) == 1:
         return {math.nan: runs[0]}

@@ -11,16 +11,12 @@ from __future__ import annotations
 
 from functools import cached_property
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
 from common.errors import InputError
-
-if TYPE_CHECKING:
-    from fem.solver import Model
 
 #: strain tensor components returned by strain_operator, per space dimension
 STRAIN_COMPONENTS = {3: ("xx", "yy", "zz", "yz", "xz", "xy"), 2: ("xx", "yy", "xy")}
@@ -32,7 +28,7 @@ _INDEX = {"x": 0, "y": 1, "z": 2}
 class PointEvaluator:
     """Locates points (n, dim) [mm] in a model's elements and evaluates the P2 basis there."""
 
-    def __init__(self, model: Model):
+    def __init__(self, model):
         self.model = model
         p, t = model.mesh.p.T, model.mesh.t.T
         A = np.stack([p[t[:, k]] - p[t[:, 0]] for k in range(1, model.dim + 1)], axis=2)
@@ -130,7 +126,7 @@ class Solution:
     Strain, stress and measures come from the element holding each point (never averaged).
     """
 
-    def __init__(self, model: Model, u: np.ndarray, f: np.ndarray | None = None, residual=float("nan")):
+    def __init__(self, model, u: np.ndarray, f: np.ndarray | None = None, residual=float("nan")):
         self.model, self.u, self.residual = model, u, residual
         self.f = np.zeros(model.ndof) if f is None else f
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import functools
+import os
 import warnings
 
 import numpy as np
@@ -30,9 +31,16 @@ from common.errors import InputError
 # --------------------------------------------------------------------------- BLAS threads
 @functools.lru_cache(maxsize=1)
 def _thread_controller():
-    """threadpoolctl's view of the loaded BLAS libraries (scanned once, then cached)."""
+    """threadpoolctl's view of the loaded BLAS libraries (scanned once, then cached).
+
+    Importing threadpoolctl sets KMP_DUPLICATE_LIB_OK in the environment (to tolerate several
+    OpenMP runtimes); the library leaves the caller's environment as it found it, so that entry is
+    removed again unless the caller had set it."""
+    had = "KMP_DUPLICATE_LIB_OK" in os.environ
     from threadpoolctl import ThreadpoolController
 
+    if not had:
+        os.environ.pop("KMP_DUPLICATE_LIB_OK", None)
     return ThreadpoolController()
 
 

@@ -8,6 +8,8 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
+from fem.analysis import model_values
+
 
 def save(fig: Figure, path, dpi: int = 110) -> None:
     """Lay out and write a figure (PNG by the path's suffix)."""
@@ -67,6 +69,48 @@ def indent_pressure_figure(name: str, along_mm, across_mm, pressure_MPa, depth_m
     fig.colorbar(sc, ax=ax, label="pressure_MPa")
     return fig
 
+
+
+def indent_figures(run, scene_run, tables) -> dict[str, Figure]:
+    """{file name: Figure} of one experiment (fem.experiments.ExperimentRun of a SceneRun, with its
+    fem.runfolder.run_tables): <name>_force.png, _profile.png, _receptors.png and (3D) _pressure.png."""
+    figures = {}
+    name, ind, steps, rows = run.name, run.indentor, run.steps, tables["steps"]
+    sweep = len({tuple(o) for o, _ in steps}) > 1
+    key = "offset_x_mm" if sweep and any(rows["offset_x_mm"]) else ("offset_z_mm" if sweep else "depth_mm")
+    figures[f"{name}_force.png"] = indent_force_figure(name, key, rows[key], rows["force_N"], rows["max_pressure_MPa"])
+    # deflection and pressure across the indentor (nodes near its centre line), last step(s)
+    x3 = np.zeros((len(scene_run.surface.x), 3))
+    x3[:, :scene_run.surface.x.shape[1]] = scene_run.surface.x
+    u, v = (x3 - ind.origin_mm) @ ind.e1, (x3 - ind.origin_mm) @ ind.e2
+    near = np.abs(u) <= max(0.5, np.sort(np.abs(u))[min(len(u) - 1, 50)])
+    order = np.argsort(v[near])
+    shown = [(f"{r.depth_mm.max():.2f} mm", r.deflection_mm[near][order], r.pressure_MPa[near][order])
+             for _, r in (steps[-8:] if not sweep else steps[-1:])]
+    figures[f"{name}_profile.png"] = indent_profile_figure(name, v[near][order], shown)
+    # receptor measures: profile across the pad (last step) or against the sweep position
+    g = scene_run.sampler.grid
+    site_x = np.pad(g.sites_mm, ((0, 0), (0, 3 - g.sites_mm.shape[1]))) - ind.origin_mm
+    site_u, site_v = site_x @ ind.e1, site_x @ ind.e2
+    # a pad grid in 3D: only the sites on the indentor's centre line (within 0.5 mm, or the nearest)
+    on_line = np.abs(site_u) <= max(0.5, np.abs(site_u).min() + 1e-9)
+    curves = {}
+    for m in scene_run.measures:
+        curves[m] = []
+        for d in np.unique(g.depth_mm):
+            sel = (g.depth_mm == d) & on_line[g.site]
+            if sweep:
+                j = np.flatnonzero(sel)[np.argmin(np.abs(site_v[g.site[sel]]))]
+                curves[m].append((f"{d:g} mm", rows[key], tables["values"][m][:, j], "-"))
+            else:
+                o = np.argsort(site_v[g.site[sel]])
+                curves[m].append((f"{d:g} mm", site_v[g.site[sel]][o], tables["values"][m][-1][sel][o], ".-"))
+    xlabel = key if sweep else "receptor site across the indentor (on its centre line), mm"
+    figures[f"{name}_receptors.png"] = indent_receptors_figure(curves, xlabel)
+    if scene_run.model.dim == 3:          # contact pressure map of the last indentation
+        r = steps[-1][1]
+        figures[f"{name}_pressure.png"] = indent_pressure_figure(name, u, v, r.pressure_MPa, r.depth_mm.max())
+    return figures
 
 
 # --------------------------------------------------------------------------- biomechanics
@@ -253,8 +297,6 @@ def response_profiles_figure(runs, data, fits) -> Figure:
 def response_scatter_figure(runs, data, fits) -> Figure:
     """Recorded rate against the candidate measure at the receptor, one panel per fem.analysis.Fit,
     with its line d = a S + b and a band of its RMS error."""
-    from fem.analysis import model_values
-
     fig = Figure(figsize=(3.6 * len(fits), 3.4))
     axes = fig.subplots(1, len(fits), squeeze=False)
     for f, ax in zip(fits, axes[0]):

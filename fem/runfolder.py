@@ -7,7 +7,8 @@ Per experiment <name>:
   pressure_MPa, force_N;
 - <name>_receptors.csv: per step every receptor point: site, x_mm, y_mm, z_mm, depth_mm and the
   measures of the scene;
-- optionally <name>.pvd with one <name>_<step>.vtu of the full fields per indentation, and PNGs.
+- optionally <name>.pvd with one <name>_<step>.vtu of the full fields per indentation
+  (the PNGs beside them are drawn by fem.plots.indent_figures).
 run.json (format RUN_FORMAT) records the model, material, receptors and experiments.
 """
 from __future__ import annotations
@@ -88,20 +89,21 @@ def run_record(model_dir, scene_run) -> dict:
 
 
 # --------------------------------------------------------------------------- writer
-def write_run(folder, model_dir, scene_run) -> None:
-    """Every experiment's files and run.json into `folder` (an existing, usually staged, folder)."""
+def write_run(folder, model_dir, scene_run) -> dict[str, dict]:
+    """Every experiment's CSVs (and PVD series) and run.json into `folder` (an existing, usually
+    staged, folder). Returns {experiment name: its tables (`run_tables`)} for the plots."""
     folder = Path(folder)
     out = scene_run.scene.output
+    written = {}
     for run in scene_run.experiments:
-        tables = _tables(run, scene_run)
+        tables = written[run.name] = run_tables(run, scene_run)
         write_csv(folder / f"{run.name}.csv", tables["steps"])
         write_csv(folder / f"{run.name}_surface.csv", tables["surface"])
         write_csv(folder / f"{run.name}_receptors.csv", tables["receptors"])
         if out.pvd if out.pvd is not None else len(run.steps) <= 20:
             _write_pvd(folder, run, scene_run)
-        if out.plots:
-            _write_plots(folder, run, scene_run, tables)
     write_json(folder / "run.json", run_record(model_dir, scene_run))
+    return written
 
 
 def _width_mm(res, ind, x3, dim) -> float:
@@ -112,18 +114,18 @@ def _width_mm(res, ind, x3, dim) -> float:
     return float(v.max() - v.min())
 
 
-def _pad3(x) -> np.ndarray:
+def pad3(x) -> np.ndarray:
     """(n, 3) points from (n, dim) ones (z = 0 in 2D)."""
     out = np.zeros((len(x), 3))
     out[:, :x.shape[1]] = x
     return out
 
 
-def _tables(run, scene_run) -> dict:
+def run_tables(run, scene_run) -> dict:
     """{"steps", "surface", "receptors": {column: values}, "values": {measure: (k, n)}} of one experiment."""
     sn, sampler, measures, dim = scene_run.surface, scene_run.sampler, scene_run.measures, scene_run.model.dim
     ind, steps = run.indentor, run.steps
-    x3 = _pad3(sn.x)
+    x3 = pad3(sn.x)
     rows = [{"step": i, "offset_x_mm": off[0], "offset_z_mm": off[2],
              "depth_mm": float(r.depth_mm.max()), "force_N": r.total_force_N,
              **{f"force_part{k}_N": f for k, f in enumerate(r.part_force_N) if len(r.depth_mm) > 1},
@@ -138,7 +140,7 @@ def _tables(run, scene_run) -> dict:
                "pressure_MPa": np.concatenate([r.pressure_MPa for _, r in steps]),
                "force_N": np.concatenate([r.force_N for _, r in steps])}
     grid = sampler.grid
-    pts, n = _pad3(grid.points_mm), len(grid.points_mm)
+    pts, n = pad3(grid.points_mm), len(grid.points_mm)
     per_step = [sampler.measures(r.observed, measures) for _, r in steps]
     values = {name: np.stack([np.asarray(v[name], float) for v in per_step]) for name in measures}
     receptors = {"step": np.repeat(np.arange(k), n), "site": np.tile(np.asarray(grid.site), k),
@@ -160,48 +162,6 @@ def _write_pvd(folder, run, scene_run) -> None:
     entries = "\n".join(f'    <DataSet timestep="{i}" file="{n}"/>' for i, n in enumerate(names))
     (folder / f"{run.name}.pvd").write_text('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
                                             f"  <Collection>\n{entries}\n  </Collection>\n</VTKFile>\n")
-
-
-def _write_plots(folder, run, scene_run, tables) -> None:
-    """<name>_force.png, _profile.png, _receptors.png and (3D) _pressure.png."""
-    from fem import plots
-
-    name, ind, steps, rows = run.name, run.indentor, run.steps, tables["steps"]
-    sweep = len({tuple(o) for o, _ in steps}) > 1
-    key = "offset_x_mm" if sweep and any(rows["offset_x_mm"]) else ("offset_z_mm" if sweep else "depth_mm")
-    plots.save(plots.indent_force_figure(name, key, rows[key], rows["force_N"], rows["max_pressure_MPa"]),
-               folder / f"{name}_force.png")
-    # deflection and pressure across the indentor (nodes near its centre line), last step(s)
-    x3 = _pad3(scene_run.surface.x)
-    u, v = (x3 - ind.origin_mm) @ ind.e1, (x3 - ind.origin_mm) @ ind.e2
-    near = np.abs(u) <= max(0.5, np.sort(np.abs(u))[min(len(u) - 1, 50)])
-    order = np.argsort(v[near])
-    shown = [(f"{r.depth_mm.max():.2f} mm", r.deflection_mm[near][order], r.pressure_MPa[near][order])
-             for _, r in (steps[-8:] if not sweep else steps[-1:])]
-    plots.save(plots.indent_profile_figure(name, v[near][order], shown), folder / f"{name}_profile.png")
-    # receptor measures: profile across the pad (last step) or against the sweep position
-    g = scene_run.sampler.grid
-    site_x = np.pad(g.sites_mm, ((0, 0), (0, 3 - g.sites_mm.shape[1]))) - ind.origin_mm
-    site_u, site_v = site_x @ ind.e1, site_x @ ind.e2
-    # a pad grid in 3D: only the sites on the indentor's centre line (within 0.5 mm, or the nearest)
-    on_line = np.abs(site_u) <= max(0.5, np.abs(site_u).min() + 1e-9)
-    curves = {}
-    for m in scene_run.measures:
-        curves[m] = []
-        for d in np.unique(g.depth_mm):
-            sel = (g.depth_mm == d) & on_line[g.site]
-            if sweep:
-                j = np.flatnonzero(sel)[np.argmin(np.abs(site_v[g.site[sel]]))]
-                curves[m].append((f"{d:g} mm", rows[key], tables["values"][m][:, j], "-"))
-            else:
-                o = np.argsort(site_v[g.site[sel]])
-                curves[m].append((f"{d:g} mm", site_v[g.site[sel]][o], tables["values"][m][-1][sel][o], ".-"))
-    xlabel = key if sweep else "receptor site across the indentor (on its centre line), mm"
-    plots.save(plots.indent_receptors_figure(curves, xlabel), folder / f"{name}_receptors.png")
-    if scene_run.model.dim == 3:          # contact pressure map of the last indentation
-        r = steps[-1][1]
-        plots.save(plots.indent_pressure_figure(name, u, v, r.pressure_MPa, r.depth_mm.max()),
-                   folder / f"{name}_pressure.png")
 
 
 # --------------------------------------------------------------------------- reader

@@ -13,15 +13,11 @@ compliance of chosen nodes along a direction (from the factorisation's Schur com
 from __future__ import annotations
 
 import warnings
-from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.sparse as sp
 
 from fem.linalg import SaddleFactor
-
-if TYPE_CHECKING:
-    from fem.solver import Model
 
 
 class LinearSystem:
@@ -32,7 +28,7 @@ class LinearSystem:
     residual ||K_ff x - b|| / ||b|| of the last solve; `backend` ("pardiso" or "scipy-splu").
     """
 
-    def __init__(self, model: Model, fixed: np.ndarray, values: np.ndarray, factor: SaddleFactor):
+    def __init__(self, model, fixed: np.ndarray, values: np.ndarray, factor: SaddleFactor):
         self.model, self.fixed, self.values, self._factor = model, fixed, values, factor
         self.free = np.setdiff1d(np.arange(model.ndof), fixed)
         self.backend = factor.backend

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import scipy.optimize as so
 
-from fem import contact
+from fem import compliance, contact
 from fem.indentors import make_indentor
 from fem.reference import hertz_sphere
 from common.errors import InputError
@@ -21,7 +21,7 @@ def _love(X, Y):
     return t1 + t2
 
 
-class HalfSpace(contact.Compliance):
+class HalfSpace(compliance.Compliance):
     """Surface nodes on a square grid (spacing h) of an elastic half-space y < 0; each node's
     force is a uniform pressure over its h x h cell (Love 1929); displacement at cell centres."""
 
@@ -157,7 +157,7 @@ def test_matrix_compliance_and_observation():
     the deflection of every node, and results equal those of the lazily built model."""
     lazy, hs = half_space_model(1.0, 0.1)
     C = hs.columns(np.arange(len(hs.xz)))
-    dense = contact.ContactModel(lazy.points_mm, lazy.areas_mm2, lambda a: contact.MatrixCompliance(C, C))
+    dense = contact.ContactModel(lazy.points_mm, lazy.areas_mm2, lambda a: compliance.MatrixCompliance(C, C))
     ind = make_indentor("sphere:2")
     a, b = lazy.indent(ind, depth_mm=0.05), dense.indent(ind, depth_mm=0.05)
     np.testing.assert_allclose(b.force_N, a.force_N, atol=1e-12)
@@ -174,7 +174,7 @@ def test_held_nodes_block_the_indentor_with_a_clear_error():
     C = hs.columns(np.arange(hs.m))
     C[held] = 0.0
     C[:, held] = 0.0
-    blocked = contact.ContactModel(cm.points_mm, cm.areas_mm2, lambda a: contact.MatrixCompliance(C))
+    blocked = contact.ContactModel(cm.points_mm, cm.areas_mm2, lambda a: compliance.MatrixCompliance(C))
     sphere = make_indentor("sphere:2")
     ok = blocked.indent(sphere, depth_mm=0.05)                       # contact radius ~0.3 mm: clear of it
     assert ok.kkt["ok"] and not ok.active[held].any()

@@ -1,0 +1,180 @@
+"""Compliance of contact candidates along an approach direction: the (m, m) operator C [mm/N]
+(a unit force along the approach at candidate j moves candidate i by C_ij along it) and the
+observed response O K^-1 B (receptor strains, deflections) per unit force.
+
+- `MatrixCompliance`: a given dense C (analytic bodies, e.g. a half-space);
+- `FactorCompliance`: columns of B^T K^-1 B computed lazily from a factorised stiffness, many
+  right-hand sides per solve, and cached;
+- `CondensedCompliance`: all of C at once as the inverse of the Schur complement of a system
+  factorised with the candidates condensed (`Model.system(condense=...)`), no solves.
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from common.errors import InputError
+
+
+class Compliance:
+    """Cached compliance columns: C[:, j] (m,) and observed response O K^-1 B e_j (r,).
+
+    Subclasses implement `_compute(idx) -> (m + r, len(idx))`.
+    """
+
+    def __init__(self, m: int, r: int):
+        self.m, self.r = m, r
+        self.held = np.zeros(m, bool)       # nodes that cannot move along the approach (zero compliance)
+        self.reach = np.ones(m, bool)       # nodes whose compliance is available (see CondensedCompliance)
+        self._slot = np.full(m, -1)
+        self._store = np.empty((m + r, 0))
+        self.computed = 0
+
+    def _ensure(self, idx):
+        missing = np.unique(idx[self._slot[idx] < 0])
+        if missing.size:
+            new = self._compute(missing)
+            start = self.computed
+            if start + missing.size > self._store.shape[1]:
+                cap = max(2 * self._store.shape[1], start + missing.size, 16)
+                grown = np.empty((self.m + self.r, cap))
+                grown[:, :start] = self._store[:, :start]
+                self._store = grown
+            self._store[:, start:start + missing.size] = new
+            self._slot[missing] = np.arange(start, start + missing.size)
+            self.computed += missing.size
+
+    def columns(self, idx) -> np.ndarray:
+        """(m, k) compliance columns (mm/N) of candidate nodes idx."""
+        idx = np.asarray(idx, int)
+        self._ensure(idx)
+        return self._store[:self.m, self._slot[idx]]
+
+    def block(self, rows, cols) -> np.ndarray:
+        """(len(rows), len(cols)) compliance (mm/N) between candidate nodes."""
+        return self.columns(cols)[np.asarray(rows, int)]
+
+    def observed(self, idx) -> np.ndarray:
+        """(r, k) observed response per unit force at candidate nodes idx."""
+        idx = np.asarray(idx, int)
+        self._ensure(idx)
+        return self._store[self.m:, self._slot[idx]]
+
+    def observe(self, force_N) -> np.ndarray:
+        """(r,) or (r, k) observed response to nodal contact forces (m,) or (m, k): cached
+        columns times the forces."""
+        force_N = np.asarray(force_N, float)
+        act = np.flatnonzero(np.any(force_N.reshape(self.m, -1) != 0, axis=1))
+        if not act.size:
+            return np.zeros((self.r,) + force_N.shape[1:])
+        return self.observed(act) @ force_N[act]
+
+
+class MatrixCompliance(Compliance):
+    """A given dense compliance (m, m) and optional observation response (r, m): analytic models."""
+
+    def __init__(self, C, observed=None):
+        C = np.asarray(C, float)
+        R = np.zeros((0, len(C))) if observed is None else np.asarray(observed, float)
+        super().__init__(len(C), len(R))
+        self._full = np.vstack([C, R])
+        self.held = np.diag(C) == 0
+
+    def _compute(self, idx):
+        return self._full[:, idx]
+
+
+class FactorCompliance(Compliance):
+    """Compliance from a factorised stiffness; columns are computed `chunk` right-hand sides at a time.
+
+    solve: callable (n_dofs, k) load -> (n_dofs, k) displacement (the factorised, constrained
+    system); n_dofs: its size; dofs: (m, dim) DOF index of each candidate node's components; direction: (dim,)
+    unit force direction (3,) (its x, y part in 2D); observe: optional sparse (r, n_dofs) observation operator;
+    fixed: optional constrained DOF indices (nodes held along the direction are marked `held`).
+    """
+
+    def __init__(self, solve, n_dofs: int, dofs, direction, observe=None, chunk: int = 64, fixed=None):
+        dofs = np.asarray(dofs)
+        m, dim = dofs.shape
+        if dim == 2 and abs(direction[2]) > 1e-12:
+            raise InputError("a 2D model can only be indented within its x-y plane: use incline 0")
+        rows = dofs.ravel()
+        cols = np.repeat(np.arange(m), dim)
+        vals = np.tile(np.asarray(direction, float)[:dim], m)
+        self.n_dofs = n_dofs
+        self.B = sp.csc_matrix((vals, (rows, cols)), shape=(self.n_dofs, m))
+        O = sp.csr_matrix((0, self.n_dofs)) if observe is None else sp.csr_matrix(observe)
+        self.O = sp.vstack([self.B.T, O]).tocsr()
+        super().__init__(m, O.shape[0])
+        self.solve, self.chunk = solve, chunk
+        if fixed is not None:
+            moves = np.abs(np.asarray(direction, float)[:dim]) > 0
+            self.held = np.all(np.isin(dofs, fixed) | ~moves, axis=1)
+
+    def _compute(self, idx):
+        return self._respond(self.B[:, idx])
+
+    def _respond(self, loads) -> np.ndarray:
+        """(m + r, k) O K^-1 loads for sparse loads (n_dofs, k) [N], `chunk` columns per solve
+        (only a chunk is ever dense)."""
+        loads = sp.csc_matrix(loads)
+        out = np.empty((self.m + self.r, loads.shape[1]))
+        for s in range(0, loads.shape[1], self.chunk):
+            u = self.solve(np.asfortranarray(loads[:, s:s + self.chunk].toarray()))
+            out[:, s:s + self.chunk] = self.O @ np.asarray(u).reshape(self.n_dofs, -1)
+        return out
+
+    def displacement(self, force_N) -> np.ndarray:
+        """(n_dofs,) full displacement field for nodal contact forces (m,): one solve."""
+        return np.asarray(self.solve((self.B @ force_N)[:, None])).reshape(-1)
+
+
+class CondensedCompliance(FactorCompliance):
+    """The whole compliance at once from a system factorised with `condense=(nodes, approach)` on
+    the candidates (`LinearSystem.compliance`: the inverse of their Schur complement, no solves);
+    observations take one solve per indentation (in blocks, `ContactModel.observe_pending`)
+    instead of cached columns. Arguments as FactorCompliance, plus the LinearSystem and the
+    candidates' P2 node ids (m,).
+
+    When only some candidates were condensed (`reach`, e.g. those a scene's indentors can touch),
+    compliance rows of the others are NaN: they cannot carry force, and their deflection comes
+    with the observation solve. Raises ValueError when none was condensed along the direction."""
+
+    def __init__(self, system, nodes, dofs, direction, observe=None, chunk: int = 64):
+        super().__init__(system.solve, system.model.ndof, dofs, direction, observe, chunk)
+        self.reach = system.stored(nodes, direction)                # the same for -direction
+        if not self.reach.any():
+            raise ValueError("no candidate has a stored compliance along this direction")
+        self._C = system.compliance(np.asarray(nodes)[self.reach], direction)
+        self._row = np.cumsum(self.reach) - 1                       # candidate -> row of _C
+        self.held = np.zeros(self.m, bool)
+        self.held[self.reach] = np.diag(self._C) == 0
+
+    def columns(self, idx) -> np.ndarray:
+        idx = np.asarray(idx, int)
+        if self.reach.all():
+            return self._C[:, idx]
+        out = np.full((self.m, len(idx)), np.nan)
+        out[self.reach] = self._C[:, self._row[idx]]
+        return out
+
+    def block(self, rows, cols) -> np.ndarray:
+        """As Compliance.block; C is symmetric, so whole rows are gathered (contiguous memory,
+        several times faster than np.ix_ on a large block) and transposed (a view)."""
+        return self._C[self._row[np.asarray(cols, int)]][:, self._row[np.asarray(rows, int)]].T
+
+    def observed(self, idx) -> np.ndarray:
+        raise NotImplementedError("a condensed compliance observes whole force vectors: use observe()")
+
+    def response(self, force_N) -> tuple[np.ndarray, np.ndarray]:
+        """((m, k) deflections of every candidate along the direction, (r, k) observed response) to
+        nodal contact forces (m, k): one solve per force vector, `chunk` of them per call."""
+        F = np.asarray(force_N, float).reshape(self.m, -1)
+        out = self._respond(self.B @ sp.csc_matrix(F))
+        return out[:self.m], out[self.m:]
+
+    def observe(self, force_N) -> np.ndarray:
+        """(r,) or (r, k) observed response to nodal contact forces (m,) or (m, k)."""
+        if not self.r:
+            return np.zeros((0,) + np.shape(force_N)[1:])
+        return self.response(force_N)[1].reshape((self.r,) + np.shape(force_N)[1:])
