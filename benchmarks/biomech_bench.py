@@ -1,4 +1,4 @@
-"""Biomechanical verification benchmark (issue 7), on the 2D five-layer cross-sections of the
+"""Biomechanical verification benchmark, on the 2D five-layer cross-sections of the
 parametric monkey and human models at the default 2D resolution (0.125 mm top size):
 
   (a) layer study around m43338 at 2 mm (thesis fig. 6-10): time, distinct ratios solved, and

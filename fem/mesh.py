@@ -5,7 +5,7 @@ every interface. pytetwild returns no labels, and with nested shells its own out
 a slab of tets about one edge length beyond the flat end caps; so its background is kept
 (`disable_filtering`) and each tet is labelled by the number of shells whose winding number at its
 centroid exceeds 0.5 (0 = outside, dropped). Its surface simplification is skipped (the input is
-already clean; it cost 15 s of 120 s on the human preset at 0.5 mm). A background sizing
+already clean, and it is a large share of the meshing time). A background sizing
 field (pytetwild's `bg_*` arguments) asks for `size_mm` in the top `fine_depth_mm` of the volar
 skin, growing by `growth` mm per mm of distance from that zone up to `coarse_mm`.
 pytetwild output differs from run to run: meshes are cached by a hash of all inputs.

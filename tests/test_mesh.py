@@ -1,5 +1,5 @@
 """3D mesh of the monkey preset through `pipeline.py mesh`: the mesh.vtu / model.json contract and
-the checks of issue 3. One coarse mesh (0.8 mm) is built once per module; pytetwild is not
+the mesher's checks. One coarse mesh (0.8 mm) is built once per module; pytetwild is not
 deterministic, so tet counts are never asserted."""
 import json
 
