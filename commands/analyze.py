@@ -8,7 +8,7 @@ import math
 from pathlib import Path
 
 from common.errors import InputError
-from common.staging import staged_output, write_json
+from common.staging import check_output_dir, staged_output, write_json
 from common.tables import columns_of, write_csv, write_markdown
 from fem import plots
 from fem.analysis import UnitAnalysis, analyze, as_runs
@@ -70,12 +70,12 @@ def run_analyze(results, neural_csv, out_dir=None, diameters_mm=None, measures=N
         raise InputError("give one results folder, or two (2D models of two diameters)")
     if diameters_mm is not None and len(results) != 2:
         raise InputError("--diameters needs two results folders")
+    out = check_output_dir(out_dir if out_dir else Path(results[0]) / "analysis")
     runs = as_runs([IndentRun(r, None if diameters_mm is None else diameters_mm[i]) for i, r in enumerate(results)])
     neural = read_neural_csv(neural_csv)
     cands = [m.strip() for m in measures.split(",") if m.strip()] if measures else None
     fit = [s.strip() for s in fit_on.split(",") if s.strip()] if fit_on else None
     res = analyze(runs, neural, cands, fit, receptor_x_mm, orientation)
-    out = Path(out_dir) if out_dir else Path(results[0]) / "analysis"
     names = write_report(out, runs, neural, res)
     lines = [f"receptor analysis in {out}: {', '.join(names)}"]
     for ua in res:

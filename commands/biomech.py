@@ -6,20 +6,26 @@ CSV tables format floats with `.9g`.
 """
 from __future__ import annotations
 
-import json
 import time
-from pathlib import Path
 
 import numpy as np
 
 from common.errors import InputError
-from common.staging import staged_output, write_json
+from common.staging import check_output_dir, staged_output, write_json
 from common.tables import write_csv
 from fem import plots
-from fem.biomech import (DeflectionExperiment, code_of, cylinder_series, idealised_fits, layer_study,
-                         parse_code)
+from fem.biomech import (
+    DeflectionExperiment,
+    code_of,
+    cylinder_series,
+    idealised_fits,
+    layer_study,
+    parse_code,
+)
 from fem.biomech_fit import fit_force_scale, fit_material, profile_residuals
+from fem.indentors import orientation_deg, shapes_for
 from fem.measured import read_deflection_csv, read_force_csv
+from fem.modelfolder import folder_info
 from fem.scene import parse_values
 
 DPI = 100
@@ -39,9 +45,18 @@ def _parse_floats(text, what) -> list[float]:
     return [float(v) for v in vals]
 
 
-def _experiment(model_dir, indentor, orientation, position_mm, nu, side):
+def _check_start(out_dir, *indentors, orientation=None) -> None:
+    """The refusals that need no model, before any is read: output folder, indentor codes, orientation."""
+    check_output_dir(out_dir)
+    for code in indentors:
+        shapes_for(code)
+    if orientation is not None:
+        orientation_deg(orientation)
+
+
+def _experiment(model_dir, indentor, orientation, position_mm, nu, side, progress=False):
     return DeflectionExperiment(model_dir, indentor=indentor, orientation=orientation,
-                                position_mm=position_mm, nu=nu, side=side)
+                                position_mm=position_mm, nu=nu, side=side, progress=progress)
 
 
 def _columns(names, rows) -> dict[str, list]:
@@ -55,14 +70,17 @@ def _force_unit(dim: int) -> str:
 
 def run_study_layers(model_dir, out_dir, base=None, layers="1,2,3,4", offsets="-1,0,1", depths="2.0",
                      indentor="wedge", orientation=None, position_mm=None, nu=None, side="mean",
-                     data_csv=None) -> str:
-    """`pipeline.py study-layers`: layer_study.csv / .json / .png and profile.png in out_dir."""
+                     data_csv=None, progress=False) -> str:
+    """`pipeline.py study-layers`: layer_study.csv / .json / .png and profile.png in out_dir.
+    progress (here and in the other back ends): True for progress on stderr, or a progress object."""
     t0 = time.perf_counter()
-    data = read_deflection_csv(data_csv) if data_csv else []
-    exp = _experiment(model_dir, indentor, orientation, position_mm, nu, side)
-    base = base or exp.info.get("material", "m43338")
+    _check_start(out_dir, indentor, orientation=orientation)
     depth_list = _parse_floats(depths, "depths")
-    study = layer_study(exp, base, _parse_ints(layers, "layers"), _parse_ints(offsets, "offsets"), depth_list)
+    layer_list, offset_list = _parse_ints(layers, "layers"), _parse_ints(offsets, "offsets")
+    data = read_deflection_csv(data_csv) if data_csv else []
+    exp = _experiment(model_dir, indentor, orientation, position_mm, nu, side, progress)
+    base = base or exp.info.get("material", "m43338")
+    study = layer_study(exp, base, layer_list, offset_list, depth_list)
     base_prof = exp.profiles(base, depth_list)
     fits = [idealised_fits(p) for p in base_prof]
     with staged_output(out_dir) as tmp:
@@ -98,26 +116,30 @@ def run_study_layers(model_dir, out_dir, base=None, layers="1,2,3,4", offsets="-
 def run_fit_material(model_dir, out_dir, deflection_csv=None, force_csv=None, keep_ratios=False, base=None,
                      free_layers="2,3,4", bounds=(1.0, 7.0), indentor="wedge", orientation=None,
                      position_mm=None, force_indentor="plate", match="least-squares", nu=None,
-                     side="mean", noise_mm=None) -> str:
+                     side="mean", noise_mm=None, progress=False) -> str:
     """`pipeline.py fit-material`: fit.json, fit_profiles.csv, fit_profiles.png, force_fit.png."""
     if deflection_csv is None and force_csv is None:
         raise InputError("fit-material needs --deflection CSV and/or --force CSV")
     t0 = time.perf_counter()
+    _check_start(out_dir, indentor, force_indentor, orientation=orientation)
+    free = _parse_ints(free_layers, "free layers")
+    if not bounds[0] < bounds[1]:
+        raise InputError(f"--bounds {bounds[0]:g} {bounds[1]:g}: give LO < HI (log10 modulus in Pa), e.g. 1 7")
     data = read_deflection_csv(deflection_csv) if deflection_csv else None
     forces = read_force_csv(force_csv) if force_csv else None
-    exp = _experiment(model_dir, indentor, orientation, position_mm, nu, side)
+    exp = _experiment(model_dir, indentor, orientation, position_mm, nu, side, progress)
     base = base or exp.info.get("material", "m43338")
     base_v = parse_code(base, exp.n_layers)
     report, fit, scale = {"model": str(model_dir), "base": base}, None, None
     if data is not None:
-        fit = fit_material(exp, data, base, _parse_ints(free_layers, "free layers"), bounds, noise_mm=noise_mm)
+        fit = fit_material(exp, data, base, free, bounds, noise_mm=noise_mm)
         report["deflection_fit"] = {**fit.report(), "indentor": exp.indentor.name,
                                     "depths_mm": [p.depth_mm for p in data], "side": side}
         report["deflection_fit"]["base_rms_mm"] = float(np.sqrt(np.mean(profile_residuals(exp, base_v, data) ** 2)))
     if forces is not None:
         ratios = base_v if keep_ratios or fit is None else fit.log10_Pa
         fexp = exp if force_indentor == indentor else _experiment(model_dir, force_indentor, orientation,
-                                                                  position_mm, nu, side)
+                                                                  position_mm, nu, side, progress)
         scale = fit_force_scale(fexp.forces_N(ratios, forces[0]), forces[1], ratios, forces[0], match)
         report["force_fit"] = {**scale.report(), "indentor": fexp.indentor.name, "ratios_from":
                                "base material" if ratios is base_v else "deflection fit",
@@ -153,14 +175,15 @@ def run_fit_material(model_dir, out_dir, deflection_csv=None, force_csv=None, ke
 
 
 def run_contact_series(model_dir, out_dir, material=None, cylinders=None, forces=None, depths=None,
-                       orientation=None, position_mm=None, nu=None) -> str:
+                       orientation=None, position_mm=None, nu=None, progress=False) -> str:
     """`pipeline.py contact-series`: cylinder_series.csv / .json / .png in out_dir."""
     if (forces is None) == (depths is None):
         raise InputError("contact-series needs --force or --depth (one of the two)")
     t0 = time.perf_counter()
+    _check_start(out_dir, orientation=orientation)
     loads = _parse_floats(forces if forces is not None else depths, "forces" if forces is not None else "depths")
     codes = None if cylinders is None else [c for c in str(cylinders).replace(" ", "").split(",") if c]
-    exp = _experiment(model_dir, "wedge", orientation, position_mm, nu, "mean")
+    exp = _experiment(model_dir, "wedge", orientation, position_mm, nu, "mean", progress)
     material = material or exp.info.get("material", "m43338")
     s = cylinder_series(exp, material, codes, **({"forces_N": loads} if forces is not None else {"depths_mm": loads}))
     force_unit = "N/mm" if exp.dim == 2 else "N"
@@ -194,9 +217,9 @@ def run_line_load(model_dir, out_dir, depths="0.05,0.5,1,2", material=None, nu=N
     from fem.nonlinear import compare_line_load
 
     t0 = time.perf_counter()
+    _check_start(out_dir)
     depth_list = _parse_floats(depths, "depths")
-    folder = Path(model_dir)
-    info = json.loads((folder / "model.json").read_text()) if (folder / "model.json").is_file() else {}
+    info = folder_info(model_dir)
     material = material or info.get("material", "m43338")
     parse_code(material)
     c = compare_line_load(model_dir, depth_list, material=material, nu=nu, half_width_mm=half_width_mm,
@@ -222,7 +245,7 @@ def run_line_load(model_dir, out_dir, depths="0.05,0.5,1,2", material=None, nu=N
     lines = [f"line load on {model_dir} ({material}, patch half width {half_width_mm:g} mm, "
              f"{'sliding' if slip else 'held'} sideways) in {out_dir} ({report['seconds']} s)"]
     for k, d in enumerate(c.depths_mm):
-        text = f"  {d:g} mm: force linear {c.force_linear_N[k]:.4g}"
+        text = f"  {d:g} mm: force linear {c.force_linear_N[k]:.4g} {'N/mm' if c.dim == 2 else 'N'}"
         if float(d) in c.failed:
             text += f"; large deformation failed: {c.failed[float(d)]}"
         elif large_deformation:

@@ -11,10 +11,11 @@ import time
 from pathlib import Path
 
 from common.errors import InputError
-from common.staging import staged_output
-from fem import plots
+from common.progress import as_progress
+from common.staging import check_output_dir, staged_output
 from fem.experiments import run_experiments
-from fem.modelfolder import read_model
+from fem.materials import Material
+from fem.modelfolder import folder_dim, folder_info, read_model
 from fem.runfolder import write_run
 from fem.scene import Scene, load_scene
 
@@ -57,37 +58,92 @@ def scene_of_flags(indentor, orientation="parallel", position=None, incline=None
 def indent_folder(model_dir, out_dir, scene: Scene, progress: bool = True) -> str:
     """Run every experiment of a scene on a model folder and write the run folder atomically into
     out_dir (CSV, run.json, and PNG and PVD as the scene says). Placement warnings go to stderr;
-    progress: report the factorisation and each experiment on stderr. Returns the summary text."""
+    progress: True (a `common.progress.Progress` on stderr), False, or a progress object. Returns
+    the summary text (2D forces in N/mm)."""
     t_start = time.perf_counter()
+    check_output_dir(out_dir)
+    scene.check_dim(folder_dim(folder_info(model_dir)))
     model, info = read_model(model_dir, scene.material, scene.nu)
-    say = (lambda text: print(text, file=sys.stderr, flush=True)) if progress else None
-    run = run_experiments(model, info, scene, progress=say)
+    store = response_store(model_dir, scene, progress)
+    run = run_experiments(model, info, scene, progress=as_progress(progress), store=store)
     for warning in run.warnings:
         print(f"warning: {warning}", file=sys.stderr)
     with staged_output(out_dir) as tmp:
         tables = write_run(tmp, model_dir, run)
         if scene.output.plots:
+            from fem import plots  # matplotlib: only when figures are written
+
             for e in run.experiments:
                 for name, fig in plots.indent_figures(e, run, tables[e.name]).items():
                     plots.save(fig, tmp / name)
     total = time.perf_counter() - t_start
     lines = [(f"indentation results in {out_dir} ({total:.1f} s; model {model.ndof} DOFs, "
               f"{len(run.surface.nodes)} contact candidates, {len(run.grid.points_mm)} receptor points)")]
-    for e in run.experiments:
-        forces = [r.total_force_N for _, r in e.steps]
-        worst = max(r.kkt["penetration_mm"] for _, r in e.steps)
-        lines.append(f"  {e.name}: {len(e.steps)} indentations, {e.seconds:.2f} s, force "
-                     f"{min(forces):.4g}-{max(forces):.4g} N, max penetration {worst:.1e} mm")
+    lines += [experiment_line(e, model.dim) for e in run.experiments]
+    lines += [f"  response model: {how} {key} ({size / 2**20:.1f} MB, built in {built:.2f} s)"
+              for key, how, built, size in run.responses]
     return "\n".join(lines)
+
+
+def response_store(model_dir, scene: Scene, progress=True):
+    """The model folder's `fem.response.ResponseStore` when the folder keeps response models
+    (`pipeline.py prepare` made it) and the scene's outputs can be answered by them (no experiment
+    writes a PVD of full fields), else None; when a PVD keeps a stored model from being used, says
+    so in one line on stderr (if progress). A folder without stored models is factorised: building
+    one costs one solve per condensed candidate, far more than a first run needs."""
+    from fem.response import ResponseStore
+    from fem.runfolder import writes_pvd
+
+    store = ResponseStore(model_dir)
+    if not store.folder.is_dir():
+        return None
+    if not any(writes_pvd(scene.output, len(e.offsets_mm) * len(e.loads)) for e in scene.experiments):
+        return store
+    if progress:
+        print("response model: not used, the PVD output needs full fields: factorising (--no-pvd "
+              "answers from the stored response models)", file=sys.stderr, flush=True)
+    return None
+
+
+def _span(values, fmt=".4g") -> str:
+    lo, hi = min(values), max(values)
+    return f"{lo:{fmt}}" if f"{lo:{fmt}}" == f"{hi:{fmt}}" else f"{lo:{fmt}}-{hi:{fmt}}"
+
+
+def experiment_line(e, dim: int) -> str:
+    """Summary line of one experiment run: count, time, force (N; N/mm in 2D plane strain), the
+    depth reached (force control) and the worst penetration."""
+    force_unit = "N/mm" if dim == 2 else "N"
+    forces = [r.total_force_N for _, r in e.steps]
+    depths = [float(r.depth_mm.max()) for _, r in e.steps]
+    worst = max(r.kkt["penetration_mm"] for _, r in e.steps)
+    text = f"  {e.name}: {len(e.steps)} indentation{'s' if len(e.steps) != 1 else ''}, {e.seconds:.2f} s, "
+    if e.experiment.force_N is not None:
+        text += f"force {_span(forces)} {force_unit} reached at depth {_span(depths, '.3g')} mm"
+    else:
+        text += f"depth {_span(depths, '.3g')} mm, force {_span(forces)} {force_unit}"
+    return text + f", max penetration {worst:.1e} mm"
 
 
 def run_indent(model, scene=None, indentor=None, orientation="parallel", position=None, incline=None,
                depth=None, force=None, equal_force=False, max_depth=5.0, sweep=None, material=None, nu=None,
                receptor_depths="0.5,0.75,1.0", receptor_spacing=1.0, line=None, pvd=None, out=None,
-               progress: bool = True) -> str:
+               progress: bool = True, plots=None) -> str:
     """`pipeline.py indent` from its option values: the --scene file, or the experiment of the
-    flags; --material, --nu and --pvd override the scene's. Output folder default:
+    flags; --material, --nu, --pvd and --plots override the scene's. Output folder default:
     <model>/indent_<scene file stem or experiment name>."""
+    spec, out = indent_scene(model, scene, indentor, orientation, position, incline, depth, force, equal_force,
+                             max_depth, sweep, material, nu, receptor_depths, receptor_spacing, line, pvd, out,
+                             plots)
+    return indent_folder(model, out, spec, progress=progress)
+
+
+def indent_scene(model, scene=None, indentor=None, orientation="parallel", position=None, incline=None,
+                 depth=None, force=None, equal_force=False, max_depth=5.0, sweep=None, material=None, nu=None,
+                 receptor_depths="0.5,0.75,1.0", receptor_spacing=1.0, line=None, pvd=None,
+                 out=None, plots=None) -> tuple[Scene, str]:
+    """(validated Scene, output folder) of `run_indent`'s option values; reads the scene file
+    only, not the model (the `run` chain checks its indent stage before the model exists)."""
     if scene:
         spec = load_scene(scene)
         name = Path(scene).stem
@@ -96,7 +152,12 @@ def run_indent(model, scene=None, indentor=None, orientation="parallel", positio
                               sweep, receptor_depths, receptor_spacing, line)
         name = spec.experiments[0].name
     overrides = {k: v for k, v in (("material", material), ("nu", nu)) if v is not None}
-    if pvd is not None:
-        overrides["output"] = dataclasses.replace(spec.output, pvd=pvd)
+    if overrides:
+        Material(material or spec.material or "m33338", 0.48 if nu is None else nu)   # code form, nu range
+    output = {k: v for k, v in (("pvd", pvd), ("plots", plots)) if v is not None}
+    if output:
+        overrides["output"] = dataclasses.replace(spec.output, **output)
     spec = dataclasses.replace(spec, **overrides)
-    return indent_folder(model, out or str(Path(model) / f"indent_{name}"), spec, progress=progress)
+    out = out or str(Path(model) / f"indent_{name}")
+    check_output_dir(out)
+    return spec, out

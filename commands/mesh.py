@@ -3,9 +3,11 @@ tetrahedral mesh (fem.mesh) or the 2D plane-strain mesh (fem.mesh2d: the 2D pres
 section of the 3D model), written to the output folder; returns the summary text."""
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass, replace
 
 from common.errors import InputError
+from common.staging import check_output_dir
 from fem.model import PRESET_PARAMS, model_from_args, params_for
 from fem.presets import PRESETS_2D
 
@@ -80,6 +82,31 @@ def _given(**kw):
     return {k: v for k, v in kw.items() if v is not None}
 
 
+def check_options(out, source=None, preset=None, section_z_mm=None, bone=False, size_mm=None, coarse_mm=None,
+                  growth=None, fine_depth_mm=None, options: ModelOptions = ModelOptions()):
+    """Validate `run_mesh`'s options without reading any file: (2D?, fem.mesh.Sizing or
+    fem.mesh2d.Sizing2D). InputError names the first bad one."""
+    from fem import mesh, mesh2d
+
+    if preset is not None and preset not in PRESETS_2D and preset not in PRESET_PARAMS:
+        raise InputError(f"unknown preset '{preset}': use one of "
+                         f"{sorted(PRESET_PARAMS) + list(PRESETS_2D)}")
+    if bone and preset not in ("cylinder8", "cylinder16"):
+        raise InputError("--bone is for the 2D cylinders (--preset cylinder8 or cylinder16)")
+    two_d = preset in PRESETS_2D or section_z_mm is not None
+    if preset in PRESETS_2D and source is not None:
+        raise InputError(f"--preset {preset} is a 2D model: give no sections folder")
+    if not two_d and (source is None) == (preset is None):
+        raise InputError("give either a folder with sections.json or --preset, not both")
+    sizes = _given(size_mm=size_mm, coarse_mm=coarse_mm, growth=growth, fine_depth_mm=fine_depth_mm)
+    sizing = (mesh2d.Sizing2D if two_d else mesh.Sizing)(**sizes)
+    sizing.check()
+    if not two_d or section_z_mm is not None:
+        model_params(preset, options).check()
+    check_output_dir(out)
+    return two_d, sizing
+
+
 def run_mesh(out, source=None, preset=None, section_z_mm=None, bone=False, size_mm=None, coarse_mm=None,
              growth=None, fine_depth_mm=None, options: ModelOptions = ModelOptions(), z_range_mm=None,
              tip_width_frac: float = 0.9, force=False, progress=True) -> str:
@@ -91,22 +118,14 @@ def run_mesh(out, source=None, preset=None, section_z_mm=None, bone=False, size_
     the defaults); z_range_mm: (z0, z1) sections used; force: rebuild a current 3D mesh."""
     from fem import mesh2d
 
-    two_d = preset in PRESETS_2D or section_z_mm is not None
-    if preset is not None and preset not in PRESETS_2D and preset not in PRESET_PARAMS:
-        raise InputError(f"unknown preset '{preset}': use one of "
-                         f"{sorted(PRESET_PARAMS) + list(PRESETS_2D)}")
-    if bone and preset not in ("cylinder8", "cylinder16"):
-        raise InputError("--bone is for the 2D cylinders (--preset cylinder8 or cylinder16)")
-    sizes = _given(size_mm=size_mm, coarse_mm=coarse_mm, growth=growth, fine_depth_mm=fine_depth_mm)
+    two_d, sizing = check_options(out, source, preset, section_z_mm, bone, size_mm, coarse_mm, growth,
+                                  fine_depth_mm, options)
     if two_d:
-        sizing = mesh2d.Sizing2D(**sizes)
         if section_z_mm is not None:
             model = model_from_args(source, preset, model_params(preset, options),
                                     z_range_mm=_tuple(z_range_mm), tip_width_frac=tip_width_frac)
             domain = mesh2d.section_domain(model, section_z_mm)
         else:
-            if source is not None:
-                raise InputError(f"--preset {preset} is a 2D model: give no sections folder")
             domain = mesh2d.preset_domain(preset, bone=bone)
         _, rep = mesh2d.run_mesh2d(out, domain, sizing, progress=progress)
         return mesh2d.summary(rep, out) + (size_note(model) if section_z_mm is not None else "")
@@ -114,7 +133,9 @@ def run_mesh(out, source=None, preset=None, section_z_mm=None, bone=False, size_
 
     model = model_from_args(source, preset, model_params(preset, options), z_range_mm=_tuple(z_range_mm),
                             tip_width_frac=tip_width_frac)
-    done = mesh3d.run_mesh(out, model, mesh3d.Sizing(**sizes), force=force, progress=progress)
+    done = mesh3d.run_mesh(out, model, sizing, force=force, progress=progress)
+    for warning in () if done is None else done[2]["warnings"]:
+        print(f"warning: {warning}", file=sys.stderr)
     if done is None:
         return (f"{out}: mesh.vtu and model.json are current for these inputs (use --force to redo)"
                 + size_note(model))

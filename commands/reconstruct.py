@@ -1,6 +1,7 @@
 """`reconstruct`: turntable images -> sections.json, surface.stl, report.png; and the `run` chain."""
 from __future__ import annotations
 
+from common.staging import check_output_dir
 from reconstruct.pipeline import reconstruct_folder
 
 
@@ -8,11 +9,12 @@ def run_reconstruct(images, out_dir, spacing_mm=(0.5, 2.0), tol_mm: float = 0.02
                     force: bool = False, progress: bool = False) -> str:
     """Reconstruct the turntable folder `images` into out_dir; returns the summary text (a one-line
     note instead when out_dir already holds the outputs of these images and options)."""
+    check_output_dir(out_dir)
     result = reconstruct_folder(images, out_dir, spacing_mm=tuple(spacing_mm), tol_mm=tol_mm,
                                 tip_fraction=tip_fraction, progress=progress, force=force)
     if result is None:
         return f"{out_dir}: outputs are current for these images and options (use --force to redo)"
-    return result.summary()
+    return result.summary() + f"\nwritten to      {out_dir}/ (sections.json, surface.stl, report.png)"
 
 
 def chain_steps(images, out_dir, size_mm: float, scene: str | None = None, force: bool = False,

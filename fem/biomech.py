@@ -133,12 +133,16 @@ class DeflectionExperiment:
     line through the load across the wedge) make the profile; side: see `side_profile`;
     max_factors: factorised models kept (least recently used dropped; their contact results stay
     cached, only a new depth for them re-factorises) - a 3D factor can take gigabytes.
+    progress: optional `common.progress` object (None: silent) shown the factorisations and the
+    loops over materials (`layer_study`) and cylinders (`cylinder_series`).
     """
 
     def __init__(self, model_dir, indentor: str = "wedge", orientation=None, position_mm=None,
-                 nu=None, band_mm: float = 0.25, side: str = "mean", max_factors: int = 4):
+                 nu=None, band_mm: float = 0.25, side: str = "mean", max_factors: int = 4, progress=None):
+        from common.progress import as_progress
         from fem.modelfolder import CONTACT_REGION, read_model
 
+        self.progress = as_progress(progress)
         self.model_dir, self.nu, self.band_mm, self.side = model_dir, nu, band_mm, side
         self.indentor_code = indentor
         model, info = read_model(model_dir)                         # geometry only
@@ -202,7 +206,8 @@ class DeflectionExperiment:
         cm = self._solvers.pop(key, None)
         if cm is None:
             nu = self.info.get("nu", 0.48) if self.nu is None else self.nu
-            model, system, region, _ = open_model(self.model_dir, material=Material(moduli_MPa(log10_Pa), nu=nu))
+            model, system, region, _ = open_model(self.model_dir, material=Material(moduli_MPa(log10_Pa), nu=nu),
+                                                  progress=self.progress)
             cm = ContactModel.from_fe(model, system, region)
             self.evaluations += 1
             while len(self._solvers) >= self.max_factors:
@@ -339,16 +344,16 @@ def layer_study(exp: DeflectionExperiment, base: str = "m43338", layers=(1, 2, 3
         for off in sorted(set(int(o) for o in offsets)):
             v = b.copy()
             v[int(layer) - 1] += off
-            if not 0 <= v[int(layer) - 1] <= 9:
-                continue
-            code = code_of(v)
-            codes.append(code)
-            if code not in study.profiles:
-                study.profiles[code] = exp.profiles(code, depths_mm)
+            if 0 <= v[int(layer) - 1] <= 9:
+                codes.append(code_of(v))
         if len(codes) < 2:
             raise InputError(f"layer {layer}: the offsets {list(offsets)} give fewer than two codes "
                              f"with digits 0-9 around {base}")
         study.layers[int(layer)] = codes
+    todo = list(dict.fromkeys(c for codes in study.layers.values() for c in codes))
+    for code in exp.progress.bar(todo, desc="materials", unit="material"):
+        study.profiles[code] = exp.profiles(code, depths_mm)
+    for layer, codes in study.layers.items():
         for k, depth in enumerate(study.depths_mm):
             lo, hi = study.profiles[codes[0]][k], study.profiles[codes[-1]][k]
             d = np.union1d(lo.distance_mm, hi.distance_mm)
@@ -404,7 +409,7 @@ def cylinder_series(exp: DeflectionExperiment, material, codes=None, forces_N=No
         raise InputError(f"cylinder series {kind}s must be positive, got {loads.tolist()}")
     cm, scale = exp.contact_model(as_log10(material, exp.n_layers))
     out = np.zeros((4, len(loads), len(codes)))
-    for k, code in enumerate(codes):
+    for k, code in enumerate(exp.progress.bar(codes, desc="cylinders", unit="cylinder")):
         ind = exp.indentor_for(f"cylinder:{code}")
         for j, v in enumerate(loads):
             res = cm.indent(ind, force_N=v / scale) if kind == "force" else cm.indent(ind, depth_mm=v)

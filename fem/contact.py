@@ -54,17 +54,13 @@ import scipy.linalg as sla
 
 from common.errors import InputError
 from fem.compliance import Compliance, CondensedCompliance, FactorCompliance
-from fem.linalg import blas_threads
+from fem.linalg import SERIAL_BLAS_BELOW, blas_threads
 
 GAP_TOL_MM = 1e-8
 """Allowed penetration after deformation (mm) and the pivoting threshold on the gap."""
 FORCE_RTOL = 1e-6
 """Relative tolerance on prescribed forces."""
 MAX_DEPTH_MM = 5.0
-SERIAL_BLAS_BELOW = 1500
-"""Active sets smaller than this are factorised on one BLAS thread: for such small Cholesky
-factors a second thread mostly waits for the other core, which is often busy, and can slow the
-factorisation several times over."""
 
 
 # --------------------------------------------------------------------------- facets and pressure
@@ -96,6 +92,22 @@ def smoothed_pressure(force_N, facets, shares) -> np.ndarray:
     num = np.bincount(facets.ravel(), (shares * p_facet[:, None]).ravel(), minlength=len(force_N))
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(area > 0, num / area, 0.0)
+
+
+def fe_facets(model, region: str, sn) -> tuple[np.ndarray, np.ndarray]:
+    """((k, n) candidate-local node indices, (k, n) area shares) of the facets of `region` of a
+    `fem.solver.Model`, whose candidate nodes are `sn` (`Model.surface_nodes(region)`): the
+    `facets` argument of ContactModel."""
+    mesh, fids = model.mesh, model.region_facets(region)
+    fv = mesh.facets[:, fids]
+    mids = mesh.f2e[:, fids] if model.dim == 3 else fids[None]
+    facets = np.searchsorted(sn.nodes, np.vstack([fv, mids + mesh.nvertices]).T)
+    x = mesh.p[:, fv]
+    if model.dim == 3:
+        size = 0.5 * np.linalg.norm(np.cross((x[:, 1] - x[:, 0]).T, (x[:, 2] - x[:, 0]).T), axis=1)
+    else:
+        size = np.linalg.norm(x[:, 1] - x[:, 0], axis=0)
+    return facets, facet_shares(facets, size, model.dim)
 
 
 class BlockedError(InputError):
@@ -252,22 +264,13 @@ class ContactModel:
         `LinearSystem` (constraints applied); observe: optional sparse (r, ndof) operator
         (e.g. `model.strain_operator(receptors)`) whose response is cached with the columns."""
         sn = model.surface_nodes(region)
-        mesh, fids = model.mesh, model.region_facets(region)
-        fv = mesh.facets[:, fids]
-        mids = mesh.f2e[:, fids] if model.dim == 3 else fids[None]
-        facets = np.searchsorted(sn.nodes, np.vstack([fv, mids + mesh.nvertices]).T)
-        x = mesh.p[:, fv]
-        if model.dim == 3:
-            size = 0.5 * np.linalg.norm(np.cross((x[:, 1] - x[:, 0]).T, (x[:, 2] - x[:, 0]).T), axis=1)
-        else:
-            size = np.linalg.norm(x[:, 1] - x[:, 0], axis=0)
         def compliance_for(a):
             try:
                 return CondensedCompliance(system, sn.nodes, sn.dofs, a, observe=observe, chunk=chunk)
             except ValueError:          # not condensed along a (or not these nodes): lazy columns
                 return FactorCompliance(system.solve, model.ndof, sn.dofs, a, observe=observe, chunk=chunk,
                                         fixed=system.fixed)
-        return cls(sn.x, sn.area, compliance_for, facets=(facets, facet_shares(facets, size, model.dim)), **kw)
+        return cls(sn.x, sn.area, compliance_for, facets=fe_facets(model, region, sn), **kw)
 
     def compliance(self, direction) -> Compliance:
         key = tuple(np.round(direction, 12))

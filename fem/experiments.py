@@ -6,7 +6,8 @@
         e.name, e.indentor, e.steps, e.seconds       # steps: [(offset (3,) mm, ContactResult)]
 
 Only the candidate nodes the scene's indentors can reach (`fem.contact.reach`) are condensed
-when the model is factorised. No files are read or written here (`fem.runfolder` writes them).
+when the model is factorised. No files are read or written here (`fem.runfolder` writes them)
+except through a given `fem.response.ResponseStore`.
 """
 from __future__ import annotations
 
@@ -16,10 +17,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from common.errors import InputError
+from common.progress import as_progress
 from fem.contact import ContactModel, reach
 from fem.indentors import approach_direction, make_indentor
 from fem.modelfolder import CONTACT_REGION, approach_down, factorise, receptor_surface
 from fem.receptors import ReceptorSampler, receptor_grid
+from fem.response import contact_model, stored_responses
 from fem.scene import AXES, Experiment, Scene
 
 
@@ -42,7 +45,8 @@ class ExperimentRun:
 class SceneRun:
     """Every experiment of a scene on one model, with what their outputs need: the contact model,
     its candidate nodes (`fem.solver.SurfaceNodes`), the receptor grid and sampler, the measures,
-    the receptor line ((axis, mm) or None) and warnings about the placement."""
+    the receptor line ((axis, mm) or None), warnings about the placement and the stored response
+    models used ([(key, "stored" or "built", build seconds, bytes)], `fem.response`)."""
     model: object
     info: dict
     scene: Scene
@@ -54,6 +58,7 @@ class SceneRun:
     line: tuple | None
     experiments: list
     warnings: list
+    responses: list = field(default_factory=list)
 
 
 def top_point(points, place) -> int:
@@ -116,9 +121,15 @@ def receptor_line(line, sn, dim) -> tuple[int, float] | None:
     return axis, value
 
 
-def run_experiments(model, info, scene: Scene, progress=None) -> SceneRun:
+def run_experiments(model, info, scene: Scene, progress=None, store=None) -> SceneRun:
     """Every experiment of `scene` on a model folder's model (`fem.modelfolder.read_model`).
-    progress: optional callable(str) told about the factorisation and each finished experiment."""
+    progress: optional `common.progress` object (None: silent): the receptor sampler build, the
+    factorisation and a bar over the indentations.
+    store: optional `fem.response.ResponseStore` of the model folder: the contact problems and
+    receptor measures are then answered by its response models (built and stored when missing,
+    `fem.response.stored_responses`); such a run has no full displacement fields (no PVD)."""
+    progress = as_progress(progress)
+    scene.check_dim(model.dim)
     sn = model.surface_nodes(CONTACT_REGION[model.dim])
     runs, warnings, touched = [], [], np.zeros(len(sn.nodes), bool)
     for exp in scene.experiments:
@@ -131,22 +142,27 @@ def run_experiments(model, info, scene: Scene, progress=None) -> SceneRun:
     rc = scene.receptors
     line = receptor_line(rc.line, sn, model.dim)
     grid = receptor_grid(*receptor_surface(model, sn), np.asarray(rc.depths_mm, float), rc.spacing_mm, line)
-    sampler = ReceptorSampler(model, grid)
-    system = factorise(model, info, sn.nodes[touched], progress)     # only what the scene can touch
-    cm = ContactModel.from_fe(model, system, CONTACT_REGION[model.dim], observe=sampler.operator)
-    for run in runs:
-        _indent(cm, run)
-        if progress is not None:
-            progress(f"{run.name}: {len(run.steps)} indentations in {run.seconds:.2f} s")
-    return SceneRun(model, info, scene, cm, sn, grid, sampler, list(rc.measures), line, runs, warnings)
+    used = []
+    if store is None:
+        with progress.task(f"receptor operators at {len(grid.points_mm)} points", kind=f"sampler-{model.dim}d",
+                           size=len(grid.points_mm)):
+            sampler = ReceptorSampler(model, grid)
+        system = factorise(model, info, sn.nodes[touched], progress)     # only what the scene can touch
+        cm = ContactModel.from_fe(model, system, CONTACT_REGION[model.dim], observe=sampler.operator)
+    else:
+        responses, sampler, used = stored_responses(store, model, [r.indentor.approach for r in runs], grid,
+                                                    touched, progress)
+        cm = contact_model(model, sn, responses)
+    todo = [(run, off, load) for run in runs for off in run.experiment.offsets_mm for load in run.experiment.loads]
+    for run, off, load in progress.bar(todo, desc="indentations", unit="indentation"):
+        t0 = time.perf_counter()
+        run.steps.append((off, _indent_one(cm, run, off, load)))
+        run.seconds += time.perf_counter() - t0
+    return SceneRun(model, info, scene, cm, sn, grid, sampler, list(rc.measures), line, runs, warnings, used)
 
 
-def _indent(cm: ContactModel, run: ExperimentRun) -> None:
-    """Every indentation of one experiment, position by position, load by load."""
-    t0 = time.perf_counter()
-    exp = run.experiment
-    for off in exp.offsets_mm:
-        for load in exp.loads:
-            res = cm.sweep(run.indentor, off[None], **load)[0] if exp.sweep is not None else cm.indent(run.indentor, **load)
-            run.steps.append((off, res))
-    run.seconds = time.perf_counter() - t0
+def _indent_one(cm: ContactModel, run: ExperimentRun, off, load):
+    """One indentation of an experiment: at offset `off` (3,) mm with `load` (depth or force)."""
+    if run.experiment.sweep is not None:
+        return cm.sweep(run.indentor, off[None], **load)[0]
+    return cm.indent(run.indentor, **load)

@@ -260,17 +260,23 @@ def approach_direction(incline_deg: float = 0.0) -> np.ndarray:
     return np.array([0.0, -math.cos(i), math.sin(i)])
 
 
-def _orientation_deg(orientation) -> float:
+def orientation_deg(orientation) -> float:
+    """Angle (deg) of an indentor's length axis to the finger axis: "parallel" 0, "perpendicular"
+    90, or a number (or its text); anything else is an InputError."""
     named = {"parallel": 0.0, "perpendicular": 90.0}
     if isinstance(orientation, str):
         if orientation in named:
             return named[orientation]
         try:
-            return float(orientation)
+            deg = float(orientation)
         except ValueError:
-            raise InputError(f"unknown orientation '{orientation}': use parallel, perpendicular "
-                             f"or an angle in degrees to the finger axis") from None
-    return float(orientation)
+            deg = math.nan
+    else:
+        deg = float(orientation)
+    if not math.isfinite(deg):
+        raise InputError(f"unknown orientation '{orientation}': use parallel, perpendicular "
+                         f"or an angle in degrees to the finger axis")
+    return deg
 
 
 def place(parts, name="indentor", *, offsets_mm=None, position_mm=(0.0, 0.0), orientation="parallel",
@@ -292,7 +298,7 @@ def place(parts, name="indentor", *, offsets_mm=None, position_mm=(0.0, 0.0), or
         raise InputError("approach along the finger axis is not supported: indent the pad (e.g. -y)")
     z /= np.linalg.norm(z)
     x = np.cross(z, a)
-    th = math.radians(_orientation_deg(orientation))
+    th = math.radians(orientation_deg(orientation))
     e1 = math.cos(th) * z - math.sin(th) * x
     e2 = math.sin(th) * z + math.cos(th) * x
     pos = np.asarray(position_mm, float)
@@ -306,13 +312,14 @@ def place(parts, name="indentor", *, offsets_mm=None, position_mm=(0.0, 0.0), or
 
 
 # --------------------------------------------------------------------------- catalogue
-def _number(text: str, what: str) -> float:
+def _number(text: str, what: str, unit: str = "mm", zero: bool = False) -> float:
+    """A positive finite number (zero: >= 0) from an indentor code's argument."""
     try:
-        value = float(text.removesuffix("mm"))
+        value = float(text.removesuffix(unit))
     except ValueError:
-        raise InputError(f"bad {what} '{text}': give a number in mm") from None
-    if not value > 0:
-        raise InputError(f"{what} must be positive, got {text}")
+        raise InputError(f"bad {what} '{text}': give a number in {unit}") from None
+    if not math.isfinite(value) or not (value >= 0 if zero else value > 0):
+        raise InputError(f"{what} must be {'>= 0' if zero else 'positive'} {unit}, got {text}")
     return value
 
 
@@ -349,7 +356,7 @@ def shapes_for(spec: str):
                 raise InputError(f"unknown step shape {i}: steps 0-5 exist (or give the half-wavelength in mm)")
             return spec, (Step(STEP_HALF_WAVELENGTH_MM[i]),), None
         vals = [float(t) for t in arg.split(",")] if _is_numbers(arg) else None
-        if not vals or len(vals) > 2 or vals[0] < 0:
+        if not vals or len(vals) > 2 or not all(map(math.isfinite, vals)) or vals[0] < 0:
             raise InputError(f"bad step '{arg}': give 0-5, or half-wavelength[,height] in mm")
         return spec, (Step(*vals),), None
     if kind == "bar" and arg:
@@ -359,7 +366,7 @@ def shapes_for(spec: str):
         g = tuple(_numbers(gaps, "grating gap")) if gaps else DEFAULT_GRATING_GAPS_MM
         return spec, (Grating(_number(bar, "grating bar width"), g),), None
     if kind == "wedge":
-        ang = float(arg) if arg else WEDGE_HALF_ANGLE_DEG
+        ang = _number(arg, "wedge half-angle", "deg") if arg else WEDGE_HALF_ANGLE_DEG
         if not 0 < ang < 90:
             raise InputError(f"wedge half-angle must be in (0, 90) deg, got {arg}")
         return spec, (Wedge(ang),), None
@@ -379,9 +386,7 @@ def shapes_for(spec: str):
         return spec, (Ellipsoid(*semi),), None
     if kind == "two-point" and arg:
         sep, _, tip = arg.partition(":")
-        s = float(sep)
-        if s < 0:
-            raise InputError(f"two-point separation must be >= 0 mm, got {sep}")
+        s = _number(sep, "two-point separation", zero=True)
         shape = sphere(_number(tip, "tip radius")) if tip else Cone()
         if s == 0:
             return spec, (shape,), None

@@ -2,7 +2,9 @@
 
     blas_threads(limit)                    context manager limiting BLAS threads (None: no limit)
     Pardiso(upper, schur=None)             MKL PARDISO LDL^T of a symmetric matrix (upper triangle,
-                                           CSR), optionally with the dense Schur complement onto rows
+                                           CSR), optionally with the dense Schur complement onto rows;
+                                           `solve_schur` for loads on those rows only (backward
+                                           substitution alone)
     SaddleFactor(Kdev, B, D, ...)          K = Kdev + B^T D^-1 B solved through the factorised
                                            quasi-definite [[Kdev, B^T], [B, -D]], with refinement on K
     solve_refined(A, b)                    one solve of a sparse symmetric indefinite A, one step of
@@ -49,6 +51,18 @@ def blas_threads(limit: int | None):
     return contextlib.nullcontext() if limit is None else _thread_controller().limit(limits=limit, user_api="blas")
 
 
+SERIAL_BLAS_BELOW = 1500
+"""Dense symmetric factorisations (and their solves and inverses) smaller than this run on one BLAS
+thread: for such small matrices a second thread mostly waits for the other core, which is often
+busy, and can slow them several times over (a 201 x 201 Cholesky factorisation: a fraction of a
+millisecond on one thread, tenths of a second on two OpenBLAS threads of a loaded 2-core machine)."""
+
+
+def dense_threads(n: int):
+    """`blas_threads` for dense work on an (n, n) matrix: one thread below SERIAL_BLAS_BELOW."""
+    return blas_threads(1 if n < SERIAL_BLAS_BELOW else None)
+
+
 # --------------------------------------------------------------------------- PARDISO
 def _pardiso_available(stacklevel: int) -> bool:
     """Whether pypardiso imports; warns (at `stacklevel` above the caller) when it does not."""
@@ -71,12 +85,16 @@ def _mkl_pardiso():
     """MKL's `pardiso` as a ctypes function, located once per process.
 
     pypardiso finds libmkl_rt when a PyPardisoSolver is built (without find_library's help by a
-    recursive glob over the environment, every time); the library it loaded is kept and its
-    `pardiso` symbol wrapped here, as a function object of this module's own (no environment
-    variable or pypardiso state is changed)."""
-    from pypardiso import PyPardisoSolver
+    recursive glob over the environment, every time); the library its import-time solver loaded
+    is used and its `pardiso` symbol wrapped here, as a function object of this module's own (no
+    environment variable or pypardiso state is changed)."""
+    try:                                            # the solver pypardiso built on import
+        from pypardiso.scipy_aliases import pypardiso_solver as solver
+    except ImportError:                             # (a new one searches the environment again)
+        from pypardiso import PyPardisoSolver
 
-    fn = PyPardisoSolver().libmkl["pardiso"]      # indexing gives a new function object
+        solver = PyPardisoSolver()
+    fn = solver.libmkl["pardiso"]                   # indexing gives a new function object
     fn.argtypes = [ctypes.POINTER(_PT), _I32, _I32, _I32, _I32, _I32, ctypes.c_void_p, _I32, _I32, _I32,
                    _I32, _I32, _I32, ctypes.c_void_p, ctypes.c_void_p, _I32]
     fn.restype = None
@@ -141,7 +159,8 @@ class Pardiso:
             S = np.zeros((len(schur), len(schur)), order="F")     # symmetric: either order
             self._phase(11, np.zeros(1), np.zeros(1), 1)
             self._phase(22, np.zeros(1), S, 1)
-            self._schur_factor = sla.cho_factor(S, lower=True, overwrite_a=True)
+            with dense_threads(len(S)):
+                self._schur_factor = sla.cho_factor(S, lower=True, overwrite_a=True)
         self.nnz_factor = int(ip[17])
 
     def _phase(self, phase, b, x, nrhs):
@@ -168,8 +187,28 @@ class Pardiso:
             return x
         y = np.zeros_like(b, order="F")
         self._phase(331, b, y, nrhs)
-        y[self._rows] = sla.cho_solve(self._schur_factor, y[self._rows])
+        with dense_threads(len(self._rows)):
+            y[self._rows] = sla.cho_solve(self._schur_factor, y[self._rows])
         self._phase(333, y, x, nrhs)
+        return x
+
+    def solve_schur(self, b_schur: np.ndarray) -> np.ndarray:
+        """x (n, q) with A x = b for a b (n, q) that is zero outside the Schur rows, given by its
+        values there b_schur (k, q). No forward substitution: with the interior of b zero, phase
+        331 leaves zeros in the interior and b unchanged in the Schur rows, so the Schur part of x
+        is S^-1 b_schur (from S^-1 when `schur_inverse` has been computed, else the Cholesky
+        factor of S) and the interior one backward substitution (phase 333)."""
+        if self._schur_factor is None:
+            raise ValueError("this factorisation has no Schur complement")
+        b_schur = np.asarray(b_schur, dtype=np.float64).reshape(len(self._rows), -1)
+        y = np.zeros((self.n, b_schur.shape[1]), order="F")
+        if not y.size:
+            return y
+        with dense_threads(len(self._rows)):
+            y[self._rows] = (self._schur_inverse @ b_schur if self._schur_inverse is not None
+                             else sla.cho_solve(self._schur_factor, b_schur))
+        x = np.zeros_like(y, order="F")
+        self._phase(333, y, x, y.shape[1])
         return x
 
     @property
@@ -183,7 +222,8 @@ class Pardiso:
         if self._schur_factor is None:
             raise ValueError("this factorisation has no Schur complement")
         if self._schur_inverse is None:
-            c, info = sla.lapack.dpotri(self._schur_factor[0], lower=1)
+            with dense_threads(len(self._rows)):
+                c, info = sla.lapack.dpotri(self._schur_factor[0], lower=1)
             if info:
                 raise np.linalg.LinAlgError(f"potri failed ({info})")
             for a in range(0, len(c), 1024):            # mirror the lower triangle, in blocks
@@ -310,7 +350,33 @@ class SaddleFactor:
     def __call__(self, b: np.ndarray) -> np.ndarray:
         """x with K x = b (b (n,) or (n, k)); sets `last_residual` (max relative residual)."""
         b = np.asarray(b, dtype=float)
-        x = self._raw(b)
+        return self._refine(self._raw(b), b)
+
+    def solve_condensed(self, cols, check: bool = True) -> np.ndarray:
+        """x (n, q) with K x = e for unit loads on the `condensed` unknowns `condensed[cols]`
+        (cols (q,) positions in `condensed`; with a rotation, unit loads along the local axis of
+        those unknowns): no forward substitution (`Pardiso.solve_schur`).
+        check: compute the residual and refine as `__call__` does (sets `last_residual`);
+        False: neither (`last_residual` NaN). Raises ValueError when nothing is condensed."""
+        cols = np.asarray(cols, int)
+        if self._pardiso is None or not len(self.condensed):
+            raise ValueError("nothing is condensed in this factorisation")
+        e = np.zeros((len(self.condensed), len(cols)))
+        e[cols, np.arange(len(cols))] = 1.0
+        x = self._pardiso.solve_schur(e)[:self.Kdev.shape[0]]
+        if self._T is not None:
+            x = self._T @ x
+        if not check:
+            self.refinements, self.last_residual = 0, float("nan")
+            return x
+        b = sp.csc_matrix((np.ones(len(cols)), (self.condensed[cols], np.arange(len(cols)))),
+                          shape=(self.Kdev.shape[0], len(cols)))
+        b = (b if self._T is None else self._T @ b).toarray()
+        return self._refine(x, b)
+
+    def _refine(self, x: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """x after the residual check and refinement of the class docstring; sets `refinements`
+        and `last_residual`."""
         r, rel = self._relres(x, b)
         self.refinements = 0
         while self.refinements < self.MAX_REFINE and rel.max(initial=0.0) > self.refine_tol:

@@ -51,6 +51,8 @@ def read_neural_csv(path) -> NeuralData:
     path = Path(path)
     try:
         text = path.read_text()
+    except UnicodeDecodeError as exc:
+        raise InputError(f"neural data '{path}' is not a text CSV file ({exc})") from None
     except OSError as exc:
         raise InputError(f"cannot read neural data '{path}': {exc.strerror or exc}") from None
     lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
@@ -104,6 +106,8 @@ def _read_table(path, columns: tuple[str, ...]) -> np.ndarray:
                     and any(c.strip() for c in r)]
     except OSError as exc:
         raise InputError(f"cannot read '{path}': {exc.strerror}") from None
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise InputError(f"'{path}' is not a text CSV file ({exc})") from None
     want = ", ".join(columns)
     if not rows:
         raise InputError(f"'{path}' has no data rows: expected CSV columns {want}")

@@ -15,18 +15,17 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import sys
+import signal
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
 
-from fem.model import N_LAYERS, LayeredModel, check_positive
 from common.errors import InputError
-from common.staging import staged_output, write_json
-
-
+from common.progress import as_progress, cache_root
+from common.staging import atomic_write, staged_output, write_json
+from fem.model import N_LAYERS, LayeredModel, check_positive
 
 #: bump when tetrahedralize() changes, so cached meshes are not reused
 MESHER_VERSION = 1
@@ -107,7 +106,11 @@ def sizing_values(model: LayeredModel, sizing: Sizing, points: np.ndarray) -> np
     return np.minimum(sizing.size_mm + sizing.growth * dist, sizing.coarse_mm)
 
 
-def background_mesh(model: LayeredModel, sizing: Sizing, spacing_mm: float = 0.75):
+BACKGROUND_SPACING_MM = 0.75
+"""Grid step of the background sizing mesh."""
+
+
+def background_mesh(model: LayeredModel, sizing: Sizing, spacing_mm: float = BACKGROUND_SPACING_MM):
     """Regular tetrahedral grid over the model's bounding box with the target sizes at its points:
     (points (n, 3), tets (m, 4) int32, values (n,))."""
     import pyvista as pv
@@ -121,23 +124,56 @@ def background_mesh(model: LayeredModel, sizing: Sizing, spacing_mm: float = 0.7
 
 
 # ---------------------------------------------------------------------- meshing
+def expected_tets(bg_t, bg_v) -> float:
+    """Rough tet count pytetwild makes for a background mesh of regular tets `bg_t` with target
+    edge lengths `bg_v` [mm] at their points: sum of each tet's volume over that of a regular tet
+    of its size; a size measure for the meshing-time estimate (outside tets included)."""
+    return float(np.sum(6 * np.sqrt(2) / np.mean(bg_v[bg_t], axis=1) ** 3)) * BACKGROUND_SPACING_MM ** 3 / 5
+
+
 def tetrahedralize(model: LayeredModel, sizing: Sizing, threads: int = 0):
     """Run pytetwild on the merged shells -> (points (P, 3), tets (T, 4)) of the tets inside the
     outer shell, unused points removed."""
-    import pytetwild
-
     sizing.check()
     v, f = model.vertices(), model.faces().astype(np.int32)
     diag = float(np.linalg.norm(v.max(0) - v.min(0)))
     bg_p, bg_t, bg_v = background_mesh(model, sizing)
-    pts, tets = pytetwild.tetrahedralize(
-        v, f, edge_length_abs=sizing.coarse_mm, epsilon=sizing.epsilon_mm / diag, vtk_ordering=True,
-        quiet=True, simplify=False, disable_filtering=True, num_opt_iter=sizing.opt_iter, num_threads=threads,
-        bg_vertices=bg_p, bg_tets=bg_t, bg_values=bg_v)
+    pts, tets = in_worker(_tetwild, {
+        "vertices": v, "faces": f, "edge_length_abs": sizing.coarse_mm, "epsilon": sizing.epsilon_mm / diag,
+        "vtk_ordering": True, "quiet": True, "simplify": False, "disable_filtering": True,
+        "num_opt_iter": sizing.opt_iter, "num_threads": threads,
+        "bg_vertices": bg_p, "bg_tets": bg_t, "bg_values": bg_v})
     keep = label_tets(model, pts, tets) > 0
     tets = tets[keep]
     used, tets = np.unique(tets, return_inverse=True)
     return pts[used], tets.reshape(-1, 4).astype(np.int64)
+
+
+def _tetwild(kwargs):
+    """pytetwild.tetrahedralize(**kwargs): (points (P, 3), tets (T, 4)); run by `in_worker`."""
+    import pytetwild
+
+    return pytetwild.tetrahedralize(**kwargs)
+
+
+def _worker_init():
+    """A worker leaves interrupts to its caller: its own process group, so a terminal's Ctrl-C
+    reaches only the caller, which then ends the worker."""
+    os.setpgid(0, 0)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def in_worker(func, *args):
+    """func(*args) in a spawned worker process; returns its result.
+
+    pytetwild's C++ (geogram) replaces the process's SIGINT handler, so Ctrl-C during a meshing
+    in the caller's process killed it on the spot, without the one-line message or any cleanup.
+    In a worker the caller keeps its handlers and waits interruptibly; on any exception
+    (KeyboardInterrupt included) the worker is terminated."""
+    import multiprocessing
+
+    with multiprocessing.get_context("spawn").Pool(1, initializer=_worker_init) as pool:
+        return pool.apply_async(func, args).get()
 
 
 def label_tets(model: LayeredModel, points: np.ndarray, tets: np.ndarray) -> np.ndarray:
@@ -305,8 +341,9 @@ def achieved_sizes(model: LayeredModel, mesh: TetMesh, sizing: Sizing) -> dict:
 
 # ---------------------------------------------------------------------- cache and output
 def cache_dir() -> Path:
-    """Mesh cache folder: $FINGERTIP_CACHE_DIR, else ~/.cache/fingertip-fem/mesh."""
-    return Path(os.environ.get("FINGERTIP_CACHE_DIR", Path.home() / ".cache" / "fingertip-fem")) / "mesh"
+    """Mesh cache folder: `common.progress.cache_root()` / mesh ($FINGERTIP_CACHE_DIR, else
+    ~/.cache/fingertip-fem)."""
+    return cache_root() / "mesh"
 
 
 def mesh_key(model: LayeredModel, sizing: Sizing) -> str:
@@ -339,36 +376,56 @@ def outputs_current(out_dir, key: str) -> bool:
         return False
 
 
-def build_mesh(model: LayeredModel, sizing: Sizing, force: bool = False, log=None):
-    """Mesh the model (from the cache unless force) -> (TetMesh, info {key, cached, mesh_s})."""
+def build_mesh(model: LayeredModel, sizing: Sizing, force: bool = False, progress=None):
+    """Mesh the model (from the cache unless force) -> (TetMesh, info {key, cached, mesh_s}).
+    progress: optional `common.progress` object (None: silent)."""
+    progress = as_progress(progress)
     sizing.check()
     key = mesh_key(model, sizing)
     path = cache_dir() / f"{key}.npz"
     t0 = time.perf_counter()
+    cached, warnings = False, []
     if path.is_file() and not force:
-        with np.load(path) as d:
-            points, tets = d["points"], d["tets"]
-        cached = True
-        _log(log, f"mesh from cache ({path.name[:12]})")
+        try:
+            points, tets = read_cache_entry(path)
+            cached = True
+        except CacheEntryError as exc:
+            warnings.append(f"mesh cache entry {path} is unreadable ({exc}); it was discarded and the mesh rebuilt")
+            path.unlink(missing_ok=True)
+    if cached:
+        progress.note(f"mesh from cache ({path.name[:12]})")
     else:
-        _log(log, f"tetrahedralising with pytetwild (volar size {sizing.size_mm} mm, "
-                  f"coarse {sizing.coarse_mm} mm); this can take a minute ...")
-        points, tets = tetrahedralize(model, sizing)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(path.stem + f".{os.getpid()}.tmp.npz")
-        np.savez_compressed(tmp, points=points, tets=tets)
-        os.replace(tmp, path)
-        cached = False
+        _, bg_t, bg_v = background_mesh(model, sizing)            # its size measure, for the estimate
+        with progress.task(f"tetrahedralising with pytetwild (volar size {sizing.size_mm} mm, coarse "
+                           f"{sizing.coarse_mm} mm)", kind="pytetwild", size=expected_tets(bg_t, bg_v)):
+            points, tets = tetrahedralize(model, sizing)
+        atomic_write(path, lambda tmp: np.savez_compressed(tmp, points=points, tets=tets))
     mesh_s = time.perf_counter() - t0
-    _log(log, f"  {len(tets)} tets, {len(points)} points in {mesh_s:.1f} s; labelling and checking ...")
-    layer = label_tets(model, points, tets)
-    mesh = TetMesh(points, tets, layer, region_tags(model, points, tets))
-    return mesh, {"key": key, "cached": cached, "mesh_s": mesh_s}
+    progress.note(f"{len(tets)} tets, {len(points)} points in {mesh_s:.1f} s")
+    with progress.task("labelling layers and regions", kind="label-tets", size=len(tets)):
+        layer = label_tets(model, points, tets)
+        mesh = TetMesh(points, tets, layer, region_tags(model, points, tets))
+    return mesh, {"key": key, "cached": cached, "mesh_s": mesh_s, "warnings": warnings}
 
 
-def _log(log, msg):
-    if log is not None:
-        log(msg)
+class CacheEntryError(Exception):
+    """A mesh cache entry that cannot be used (truncated, not an .npz, wrong arrays)."""
+
+
+def read_cache_entry(path) -> tuple[np.ndarray, np.ndarray]:
+    """(points (P, 3) mm, tets (T, 4)) of a cache entry; CacheEntryError if it is unreadable or
+    its arrays are not a tet mesh. Entries are written atomically (`build_mesh`), so a bad one
+    comes from outside the toolkit (a full disk, a copy cut short)."""
+    try:
+        with np.load(path) as d:
+            points, tets = np.asarray(d["points"], float), np.asarray(d["tets"])
+    except Exception as exc:  # noqa: BLE001 - np.load raises BadZipFile, OSError, ValueError, KeyError, EOFError, zlib.error
+        raise CacheEntryError(f"{type(exc).__name__}: {exc}") from None
+    if (points.ndim != 2 or points.shape[1] != 3 or tets.ndim != 2 or tets.shape[1] != 4 or not len(tets)
+            or tets.dtype.kind not in "iu" or tets.min() < 0 or tets.max() >= len(points)
+            or not np.isfinite(points).all()):
+        raise CacheEntryError(f"points {points.shape}, tets {tets.shape} {tets.dtype} are not a tet mesh")
+    return points, tets
 
 
 def write_mesh(out_dir, model: LayeredModel, sizing: Sizing, mesh: TetMesh, rep: dict, info: dict) -> None:
@@ -408,14 +465,16 @@ def summary(rep: dict, info: dict, out_dir) -> str:
     return "\n".join(lines)
 
 
-def run_mesh(out_dir, model: LayeredModel, sizing: Sizing, force: bool = False, progress: bool = True):
+def run_mesh(out_dir, model: LayeredModel, sizing: Sizing, force: bool = False, progress=None):
     """Build (or load), check and write the mesh of `model`; returns (TetMesh, report, info), or
-    None when out_dir already holds the outputs of these inputs (and not force)."""
+    None when out_dir already holds the outputs of these inputs (and not force). progress:
+    optional `common.progress` object, or True for one on stderr (None: silent)."""
     sizing.check()
     if not force and outputs_current(out_dir, inputs_key(model, sizing)):
         return None
-    log = (lambda m: print(m, file=sys.stderr, flush=True)) if progress else None
-    mesh, info = build_mesh(model, sizing, force=force, log=log)
-    rep = report(model, mesh, sizing)
+    progress = as_progress(progress)
+    mesh, info = build_mesh(model, sizing, force=force, progress=progress)
+    with progress.task("checking the mesh", kind="mesh-report", size=len(mesh.tets)):
+        rep = report(model, mesh, sizing)
     write_mesh(out_dir, model, sizing, mesh, rep, info)
     return mesh, rep, info

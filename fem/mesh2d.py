@@ -13,12 +13,12 @@ refused otherwise. Points are written as (x, y, 0).
 """
 from __future__ import annotations
 
-import sys
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
 from common.errors import InputError
+from common.progress import as_progress
 from common.staging import staged_output, write_json
 
 
@@ -324,13 +324,13 @@ def boundary_points(tri: np.ndarray, n_points: int) -> np.ndarray:
     return out
 
 
-def run_mesh2d(out_dir, domain: Domain2D, sizing: Sizing2D, progress: bool = True):
-    """Mesh, check and write mesh.vtu + model.json; returns ((points, triangles, layer, flags), report)."""
+def run_mesh2d(out_dir, domain: Domain2D, sizing: Sizing2D, progress=None):
+    """Mesh, check and write mesh.vtu + model.json; returns ((points, triangles, layer, flags), report).
+    progress: optional `common.progress` object, or True for one on stderr (None, False: silent)."""
     import meshio
 
-    if progress:
-        print(f"meshing 2D {domain.name} (top size {sizing.size_mm} mm) ...", file=sys.stderr, flush=True)
-    pts, tri, layer = mesh_domain(domain, sizing)
+    with as_progress(progress).task(f"meshing 2D {domain.name} (top size {sizing.size_mm} mm)"):
+        pts, tri, layer = mesh_domain(domain, sizing)
     on_b = boundary_points(tri, len(pts))
     flags = {"fixed": (on_b & domain.fixed(pts)).astype(np.uint8),
              "surface": (on_b & domain.surface(pts)).astype(np.uint8)}

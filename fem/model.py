@@ -389,6 +389,14 @@ def load_sections(path: str | Path) -> tuple[np.ndarray, list[np.ndarray], str]:
     for s in secs:
         if s.get("closed", True) is False:
             raise InputError(f"{path}: section at z={s['z']} is marked as not closed")
+    try:
+        pts = [np.asarray(p, float) for p in pts]
+    except (ValueError, TypeError):
+        pts = [np.zeros((0, 2))]
+    if (len(z) < 2 or not np.isfinite(z).all() or len(set(z)) != len(z)
+            or any(p.ndim != 2 or p.shape[1:] != (2,) or len(p) < 3 or not np.isfinite(p).all() for p in pts)):
+        raise InputError(f"{path}: expected two or more sections at distinct finite z, each with three or more "
+                         "finite [x, y] points; re-run `pipeline.py reconstruct`")
     return np.array(z), pts, hashlib.sha256(raw).hexdigest()
 
 

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from common.errors import InputError
+from common.progress import as_progress
 
 # The proximal cut is where the distal phalanx joins the rest of the finger, which the experiments
 # hold still (thesis 2.2.2: hand restrained, no joint moves; 6.2.1: the ends' boundary conditions
@@ -38,9 +39,7 @@ def read_model(model_dir, material=None, nu=None):
     from fem.solver import Model
 
     folder = Path(model_dir)
-    if not (folder / "mesh.vtu").is_file():
-        raise InputError(f"no mesh.vtu in '{model_dir}': run `pipeline.py mesh` first or give a model folder")
-    info = json.loads((folder / "model.json").read_text()) if (folder / "model.json").is_file() else {}
+    info = folder_info(folder)
     model = Model.from_mesh(folder / "mesh.vtu", material=material or info.get("material", "m33338"),
                             nu=info.get("nu", 0.48) if nu is None else nu)
     if "proximal" in model.regions and "proximal_core" not in model.regions:
@@ -48,6 +47,32 @@ def read_model(model_dir, material=None, nu=None):
         skin[model.mesh.t[:, np.isin(model.layer, SKIN_LAYERS)].ravel()] = True
         model.regions["proximal_core"] = model.regions["proximal"] & ~skin
     return model, info
+
+
+def folder_info(model_dir) -> dict:
+    """model.json of a model folder ({} if it has none); InputError without mesh.vtu or for an
+    unreadable model.json."""
+    folder = Path(model_dir)
+    if not (folder / "mesh.vtu").is_file():
+        raise InputError(f"no mesh.vtu in '{model_dir}': run `pipeline.py mesh` first or give a model folder")
+    if not (folder / "model.json").is_file():
+        return {}
+    try:
+        info = json.loads((folder / "model.json").read_text())
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise InputError(f"cannot read {folder / 'model.json'}: {exc}; re-run `pipeline.py mesh`") from None
+    types = {"kind": str, "material": str, "nu": (int, float), "params": dict, "regions": dict, "domain": str}
+    wrong = [k for k, t in types.items() if isinstance(info, dict) and k in info
+             and (not isinstance(info[k], t) or isinstance(info[k], bool))]
+    if not isinstance(info, dict) or wrong:
+        raise InputError(f"{folder / 'model.json'} is not a model folder's model.json"
+                         + (f" (wrong type of {', '.join(wrong)})" if wrong else "") + "; re-run `pipeline.py mesh`")
+    return info
+
+
+def folder_dim(info: dict) -> int:
+    """Dimension of a model folder from its model.json (`folder_info`): 2 for a plane-strain mesh."""
+    return 2 if str(info.get("kind", "")).startswith("2d") else 3
 
 
 def held_regions(model) -> dict:
@@ -68,18 +93,23 @@ def factorise(model, info, candidates=None, progress=None):
     candidates condensed along `approach_down` when there are at most CONDENSE_MAX_NODES of them.
     candidates: P2 node ids (default: every node of the contact region), e.g. `fem.contact.reach`
     of the indentations to come: fewer condensed nodes factorise faster (the Schur complement
-    costs grow with their number). progress: optional callable(str) told what is factorised."""
+    costs grow with their number). progress: optional `common.progress` object (None: silent)
+    shown the stiffness assembly and the factorisation (timed against this machine's history)."""
+    progress = as_progress(progress)
     nodes = model.surface_nodes(CONTACT_REGION[model.dim]).nodes if candidates is None else candidates
     condense = (nodes, approach_down(info)) if 0 < len(nodes) <= CONDENSE_MAX_NODES else None
-    if progress is not None:
-        progress(f"factorising {model.ndof} DOFs" + (f" with {len(nodes)} contact candidates condensed"
-                 if condense else "") + " ...")
-    return model.system(held_regions(model), condense=condense)
+    with progress.task(f"assembling the stiffness of {model.ndof} DOFs", kind=f"assemble-{model.dim}d",
+                       size=model.ndof):
+        model.K_dev
+    what = f"factorising {model.ndof} DOFs" + (f" with {len(nodes)} contact candidates condensed" if condense else "")
+    size = model.ndof + (3 * len(nodes) if condense else 0)     # the Schur block adds to the cost
+    with progress.task(what, kind=f"factorise-{model.dim}d", size=size):
+        return model.system(held_regions(model), condense=condense)
 
 
 def open_model(model_dir, material=None, nu=None, progress=None):
     """(fem.solver.Model, LinearSystem, contact region name, model.json dict) of a model folder,
-    factorised with every contact candidate condensed (`factorise`)."""
+    factorised with every contact candidate condensed (`factorise`; progress as there)."""
     model, info = read_model(model_dir, material, nu)
     return model, factorise(model, info, progress=progress), CONTACT_REGION[model.dim], info
 

@@ -41,13 +41,13 @@ most the first size).
 """
 from __future__ import annotations
 
-import sys
 from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
 
 from common.errors import InputError
+from common.progress import as_progress
 from fem.linalg import solve_refined
 
 
@@ -177,16 +177,18 @@ class NeoHookean:
     # ------------------------------------------------------------------ Newton with load stepping
     def solve(self, prescribed, steps: int = 4, tol: float = 1e-10, max_iter: int = 25,
               max_cuts: int = 8, loads=None, stops=(), partial: bool = False,
-              progress: bool = False) -> NonlinearResult:
+              progress=None) -> NonlinearResult:
         """Prescribed displacements (as `Model.system`: region -> value) applied in `steps` equal
         load steps, adapted (see the module notes; at most max_cuts halvings below 1 / steps).
         tol: Newton stops when the free residual norm is below tol times the reaction norm.
         loads: optional (ndof,) fixed nodal forces [N] scaled with the load factor too.
         stops: load factors in (0, 1) that are landed on exactly (extra converged states).
         A solve that cannot go on raises RuntimeError, or with partial=True returns the states
-        reached with the reason in `stopped`. progress: a line on stderr per converged step."""
+        reached with the reason in `stopped`. progress: optional `common.progress` object (None:
+        silent) told each converged step."""
         import time
 
+        progress = as_progress(progress)
         start = time.perf_counter()
         system = self.model.system(prescribed)
         fixed, values = system.fixed, system.values
@@ -227,9 +229,8 @@ class NeoHookean:
             out_J.append(float(self.jacobian(u).min()))
             out_s.append(time.perf_counter() - start)
             hist.append(h)
-            if progress:
-                print(f"large deformation: load factor {t:.4g}, {len(h)} Newton iterations, smallest J "
-                      f"{out_J[-1]:.3g}, {out_s[-1]:.1f} s", file=sys.stderr, flush=True)
+            progress.note(f"large deformation: load factor {t:.4g}, {len(h)} Newton iterations, smallest J "
+                          f"{out_J[-1]:.3g}, {out_s[-1]:.1f} s")
         return NonlinearResult(np.array(out_t), np.array(out_u), np.array(out_f), np.array(out_J), np.array(out_s),
                                hist, cuts, stopped)
 
@@ -341,11 +342,12 @@ def line_load_model(model_dir, material=None, nu=None, position_mm=None, half_wi
 def compare_line_load(model_dir, depths_mm=(0.05, 0.5, 1.0), material=None, nu=None, half_width_mm=0.0,
                       step_mm: float = 0.1, position_mm=None, slip: bool = False, half_length_mm: float = 1.0,
                       band_mm: float = 0.25, large_deformation: bool = True,
-                      progress: bool = False) -> LineLoadComparison:
+                      progress=None) -> LineLoadComparison:
     """Linear vs large-deformation surface deflection and force under a prescribed line load. The
     nonlinear solve goes once to the deepest depth in load steps of about step_mm, landing on every
     depth (hyperelastic: the path does not matter); large_deformation=False: the linear solution
-    only, the nonlinear fields NaN. progress: report each load step on stderr."""
+    only, the nonlinear fields NaN. progress: optional `common.progress` object (None: silent)
+    shown the linear factorisation and each load step."""
     depths = np.asarray(depths_mm, float).ravel()
     if not depths.size or np.any(depths <= 0) or not step_mm > 0 or half_width_mm < 0 or half_length_mm < 0:
         raise InputError(f"line load: depths ({depths.tolist()}) and step ({step_mm}) must be > 0 mm, "
@@ -368,7 +370,8 @@ def compare_line_load(model_dir, depths_mm=(0.05, 0.5, 1.0), material=None, nu=N
     push = [None if slip else 0.0] * d
     push[1] = -deepest
     pres = {**held_regions(model), "load": tuple(push)}
-    unit = model.system(pres).u0 / deepest                     # linear: proportional to the depth
+    with as_progress(progress).task(f"linear solve of {model.ndof} DOFs", kind=f"factorise-{d}d", size=model.ndof):
+        unit = model.system(pres).u0 / deepest                     # linear: proportional to the depth
     lin = depths[:, None] * -unit[ydofs]
     f_lin = depths * -float((model.K @ unit)[load].sum())
     n = len(depths)

@@ -12,21 +12,57 @@ from fem.analysis import model_values
 
 
 def save(fig: Figure, path, dpi: int = 110) -> None:
-    """Lay out and write a figure (PNG by the path's suffix)."""
-    fig.tight_layout()
+    """Lay out and write a figure (PNG by the path's suffix): constrained layout unless the figure
+    chose one, so labels, titles and colour bars stay inside the canvas."""
+    if fig.get_layout_engine() is None:
+        fig.set_layout_engine("constrained")
     fig.savefig(path, dpi=dpi)
 
 
+UNITS = {"MPa": "MPa", "mm": "mm", "N": "N", "mm2": "mm$^2$", "Nmm": "N mm", "deg": "deg"}
+
+
+def axis_label(name: str, dim: int = 3) -> str:
+    """A column or measure name as an axis label with its unit: 'max_pressure_MPa' -> 'max pressure,
+    MPa'; forces per mm of length and contact widths in 2D (plane strain); names without a unit
+    suffix (strains) are dimensionless."""
+    stem, _, unit = name.rpartition("_")
+    if not stem or unit not in UNITS:
+        return name.replace("_", " ") + ", -" if "strain" in name else name.replace("_", " ")
+    text = UNITS[unit]
+    if dim == 2 and unit == "N":
+        text = "N/mm"
+    if dim == 2 and unit == "mm2":
+        text = "mm (width)"
+    return f"{stem.replace('_', ' ')}, {text}"
+
+
+def force_unit(dim: int) -> str:
+    """Force unit of a model: N in 3D, N per mm of length in 2D plane strain."""
+    return "N/mm" if dim == 2 else "N"
+
+
 # --------------------------------------------------------------------------- indentation runs
-def indent_force_figure(name: str, key: str, x, force_N, max_pressure_MPa) -> Figure:
-    """Total force and peak contact pressure of one experiment against x (k,) (its column `key`:
-    depth or sweep offset, mm)."""
+KEY_LABELS = {"depth_mm": "depth, mm", "offset_x_mm": "indentor offset along x, mm",
+              "offset_z_mm": "indentor offset along z, mm"}
+
+
+def indent_force_figure(name: str, key: str, x, force_N, max_pressure_MPa, dim: int = 3,
+                        depth_mm=None) -> Figure:
+    """Total force (N; N/mm in 2D) and peak contact pressure of one experiment against x (k,)
+    (its column `key`: depth or sweep offset, mm). depth_mm (k,): a sweep at constant force, whose
+    depth reached is drawn instead of the force."""
     fig = Figure(figsize=(10, 4))
     ax = fig.subplots(1, 2)
-    ax[0].plot(x, force_N, "o-")
-    ax[0].set(xlabel=key, ylabel="force_N", title=f"{name}: force")
+    if depth_mm is not None:
+        ax[0].plot(x, depth_mm, "o-")
+        ax[0].set(xlabel=KEY_LABELS.get(key, key), ylabel="depth reached, mm",
+                  title=f"{name}: depth at {np.mean(force_N):.3g} {force_unit(dim)}")
+    else:
+        ax[0].plot(x, force_N, "o-")
+        ax[0].set(xlabel=KEY_LABELS.get(key, key), ylabel=f"force, {force_unit(dim)}", title=f"{name}: force")
     ax[1].plot(x, max_pressure_MPa, "o-")
-    ax[1].set(xlabel=key, ylabel="max_pressure_MPa", title="max contact pressure")
+    ax[1].set(xlabel=KEY_LABELS.get(key, key), ylabel="max pressure, MPa", title="max contact pressure")
     return fig
 
 
@@ -38,47 +74,57 @@ def indent_profile_figure(name: str, across_mm, results) -> Figure:
     for label, deflection, pressure in results:
         ax[0].plot(across_mm, -deflection, label=label)
         ax[1].plot(across_mm, pressure)
-    ax[0].set(ylabel="surface displacement along approach, mm (down -)", title=f"{name}: surface profile")
-    ax[0].legend(fontsize=7)
-    ax[1].set(xlabel="position across the indentor, mm", ylabel="pressure_MPa")
+    ax[0].set(ylabel="surface displacement, mm", title=f"{name}: surface profile (displacement along the "
+                                                          "approach, down negative)")
+    ax[0].legend(fontsize=7, title="depth", title_fontsize=7)
+    ax[1].set(xlabel="position across the indentor, mm", ylabel="contact pressure, MPa")
     return fig
 
 
-def indent_receptors_figure(curves: dict, xlabel: str) -> Figure:
+def indent_receptors_figure(curves: dict, xlabel: str, title: str = "") -> Figure:
     """Receptor measures, one panel per measure: curves {measure: [(label, x (k,), values (k,),
-    style)]} (a profile across the pad or against the sweep position)."""
-    fig = Figure(figsize=(8, 2.2 * len(curves)))
+    style)]} (labels: the receptor depths; a profile across the pad or against the sweep
+    position); title: which indentation(s) it shows."""
+    fig = Figure(figsize=(8, 1.2 + 2.2 * len(curves)))
     axes = fig.subplots(len(curves), 1, sharex=True, squeeze=False)
     for (m, lines), a in zip(curves.items(), axes[:, 0]):
         for label, x, vals, style in lines:
             a.plot(x, vals, style, label=label)
-        a.set_ylabel(m, fontsize=8)
-        a.legend(fontsize=7)
+        a.set_ylabel(axis_label(m), fontsize=8)
+        a.legend(fontsize=7, title="receptor depth", title_fontsize=7, loc="best")
     axes[-1, 0].set_xlabel(xlabel)
+    if title:
+        fig.suptitle(title, fontsize=10)
     return fig
 
 
 def indent_pressure_figure(name: str, along_mm, across_mm, pressure_MPa, depth_mm: float) -> Figure:
     """Contact pressure map (3D) of one indentation seen along the approach: surface nodes at
     (along, across) (m,) mm in the indentor's axes."""
-    fig = Figure(figsize=(6, 5))
+    fig = Figure(figsize=(6, 5), layout="constrained")      # set before the colour bar is added
     ax = fig.subplots()
     sc = ax.scatter(along_mm, across_mm, c=pressure_MPa, s=6, cmap="viridis")
     ax.set(xlabel="along the indentor, mm", ylabel="across the indentor, mm", aspect="equal",
            title=f"{name}: contact pressure, depth {depth_mm:.2f} mm")
-    fig.colorbar(sc, ax=ax, label="pressure_MPa")
+    fig.colorbar(sc, ax=ax, label="contact pressure, MPa")
     return fig
 
 
 
 def indent_figures(run, scene_run, tables) -> dict[str, Figure]:
     """{file name: Figure} of one experiment (fem.experiments.ExperimentRun of a SceneRun, with its
-    fem.runfolder.run_tables): <name>_force.png, _profile.png, _receptors.png and (3D) _pressure.png."""
+    fem.runfolder.run_tables): <name>_force.png (two or more indentations), _profile.png,
+    _receptors.png and (3D) _pressure.png."""
     figures = {}
     name, ind, steps, rows = run.name, run.indentor, run.steps, tables["steps"]
     sweep = len({tuple(o) for o, _ in steps}) > 1
     key = "offset_x_mm" if sweep and any(rows["offset_x_mm"]) else ("offset_z_mm" if sweep else "depth_mm")
-    figures[f"{name}_force.png"] = indent_force_figure(name, key, rows[key], rows["force_N"], rows["max_pressure_MPa"])
+    dim = scene_run.model.dim
+    if len(steps) > 1:                    # one indentation: its values are in the profile and summary
+        figures[f"{name}_force.png"] = indent_force_figure(name, key, rows[key], rows["force_N"],
+                                                           rows["max_pressure_MPa"], dim,
+                                                           rows["depth_mm"] if key != "depth_mm" and
+                                                           run.experiment.force_N is not None else None)
     # deflection and pressure across the indentor (nodes near its centre line), last step(s)
     x3 = np.zeros((len(scene_run.surface.x), 3))
     x3[:, :scene_run.surface.x.shape[1]] = scene_run.surface.x
@@ -105,8 +151,17 @@ def indent_figures(run, scene_run, tables) -> dict[str, Figure]:
             else:
                 o = np.argsort(site_v[g.site[sel]])
                 curves[m].append((f"{d:g} mm", site_v[g.site[sel]][o], tables["values"][m][-1][sel][o], ".-"))
-    xlabel = key if sweep else "receptor site across the indentor (on its centre line), mm"
-    figures[f"{name}_receptors.png"] = indent_receptors_figure(curves, xlabel)
+    xlabel = KEY_LABELS[key] if sweep else "receptor site across the indentor (on its centre line), mm"
+    last = steps[-1][1]
+    load = (f"force {last.total_force_N:.3g} {force_unit(dim)}" if run.experiment.force_N is not None
+            else f"depth {last.depth_mm.max():.3g} mm")
+    if sweep:
+        title = f"{name}: receptors under the indentor's centre line at each offset ({load})"
+    else:
+        title = (f"{name}: receptors of indentation {len(steps)} of {len(steps)} ({load}, depth reached "
+                 f"{last.depth_mm.max():.3g} mm)" if run.experiment.force_N is not None
+                 else f"{name}: receptors of indentation {len(steps)} of {len(steps)} ({load})")
+    figures[f"{name}_receptors.png"] = indent_receptors_figure(curves, xlabel, title)
     if scene_run.model.dim == 3:          # contact pressure map of the last indentation
         r = steps[-1][1]
         figures[f"{name}_pressure.png"] = indent_pressure_figure(name, u, v, r.pressure_MPa, r.depth_mm.max())
@@ -258,6 +313,30 @@ def line_load_figure(c, large_deformation: bool) -> Figure:
 
 
 
+# --------------------------------------------------------------------------- cohorts
+COHORT_PANELS = 6
+"""Experiments drawn by cohort_figure (the first ones; summary.csv has them all)."""
+
+
+def cohort_figure(curves: dict, title: str = "") -> Figure:
+    """Subjects compared per experiment: force and peak pressure against depth, one column per
+    experiment (at most COHORT_PANELS), one line per subject. curves: {experiment: {subject:
+    (depth_mm (k,), force (k,), max_pressure_MPa (k,))}}; forces in N, N/mm on 2D models."""
+    names = list(curves)[:COHORT_PANELS]
+    fig = Figure(figsize=(3.4 * len(names) + 1.0, 6.0))
+    axes = fig.subplots(2, len(names), squeeze=False)
+    for name, (top, bottom) in zip(names, axes.T):
+        for subject, (depth, force, pressure) in curves[name].items():
+            top.plot(depth, force, "o-", ms=4, label=subject)
+            bottom.plot(depth, pressure, "o-", ms=4, label=subject)
+        top.set(title=name, ylabel="force, N (N/mm in 2D)")
+        bottom.set(xlabel="depth, mm", ylabel="max pressure, MPa")
+    axes[0, 0].legend(fontsize=7)
+    if title:
+        fig.suptitle(title)
+    return fig
+
+
 # --------------------------------------------------------------------------- receptor analysis
 def response_profiles_figure(runs, data, fits) -> Figure:
     """Recorded rates (fem.neural.NeuralData of one unit) and the rates predicted by linear receptor
@@ -272,8 +351,8 @@ def response_profiles_figure(runs, data, fits) -> Figure:
         for f in fits:
             ax.plot(k, [f.predict(runs, s, data.position_mm[data.stimulus == s][:1])[0] for s in stimuli], "o-",
                     label=f"{f.measure} (depth {f.depth_mm:g} mm)")
-        ax.set_xticks(k, stimuli)
-        ax.set(ylabel="rate, imp/s")
+        ax.set_xticks(k, stimuli, rotation=30 if len(stimuli) > 6 else 0, ha="right" if len(stimuli) > 6 else "center")
+        ax.set(ylabel="rate, imp/s", xlabel="stimulus")
         ax.legend(fontsize=7)
         return fig
     fig = Figure(figsize=(9, 2.4 * len(stimuli)))
@@ -307,7 +386,18 @@ def response_scatter_figure(runs, data, fits) -> Figure:
         line = np.linspace(S.min(), S.max(), 50)
         ax.plot(line, f.a * line + f.b, "r-", lw=1)
         ax.fill_between(line, f.a * line + f.b - f.rms_ips, f.a * line + f.b + f.rms_ips, color="r", alpha=0.15)
-        ax.set(xlabel=f"{f.measure} at {f.depth_mm:g} mm", ylabel="rate, imp/s",
-               title=f"RMS {f.rms_ips:.3g} imp/s (band), R^2 {f.r2:.3f}")
+        ax.set(xlabel=f"{axis_label(f.measure)}\nat receptor depth {f.depth_mm:g} mm", ylabel="rate, imp/s",
+               title=f"RMS {f.rms_ips:.3g} imp/s (band), R$^2$ {f.r2:.3f}")
         ax.title.set_fontsize(8)
+        _readable_ticks(ax.xaxis)
     return fig
+
+
+def _readable_ticks(axis, nbins: int = 5) -> None:
+    """At most nbins tick labels, very small or large values with a shared power of ten."""
+    from matplotlib.ticker import MaxNLocator, ScalarFormatter
+
+    axis.set_major_locator(MaxNLocator(nbins=nbins))
+    fmt = ScalarFormatter(useMathText=True)
+    fmt.set_powerlimits((-2, 3))
+    axis.set_major_formatter(fmt)

@@ -88,6 +88,17 @@ class ReceptorSampler:
         self.operator = sp.vstack(blocks).tocsr()
         self.grid = grid
 
+    @classmethod
+    def without_operator(cls, dim: int, grid: ReceptorGrid, shift_mm) -> "ReceptorSampler":
+        """A sampler that only turns operator outputs computed elsewhere (a stored response model,
+        `fem.response`) into measures: no model, `operator` None; shift_mm (n,) as `shift_mm`."""
+        self = cls.__new__(cls)
+        self.dim, self.n, self.grid = dim, len(grid.points_mm), grid
+        self.shift_mm = np.asarray(shift_mm, float)
+        self.sizes = [self.n * c for c in ((3, 6, 6) if dim == 3 else (2, 3, 4))]
+        self.operator = None
+        return self
+
     def state(self, values) -> State:
         """Measures state from `operator @ u` (r,)."""
         u, e, s = np.split(np.asarray(values, float), np.cumsum(self.sizes)[:-1])

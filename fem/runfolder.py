@@ -89,6 +89,16 @@ def run_record(model_dir, scene_run) -> dict:
 
 
 # --------------------------------------------------------------------------- writer
+PVD_DEFAULT_MAX = 20
+"""An experiment writes a PVD series by default when it has at most this many indentations."""
+
+
+def writes_pvd(output, indentations: int) -> bool:
+    """Whether an experiment of `indentations` indentations writes a PVD series under a scene's
+    `output` (fem.scene.Output: pvd true, false, or None for the default)."""
+    return bool(output.pvd) if output.pvd is not None else indentations <= PVD_DEFAULT_MAX
+
+
 def write_run(folder, model_dir, scene_run) -> dict[str, dict]:
     """Every experiment's CSVs (and PVD series) and run.json into `folder` (an existing, usually
     staged, folder). Returns {experiment name: its tables (`run_tables`)} for the plots."""
@@ -100,7 +110,7 @@ def write_run(folder, model_dir, scene_run) -> dict[str, dict]:
         write_csv(folder / f"{run.name}.csv", tables["steps"])
         write_csv(folder / f"{run.name}_surface.csv", tables["surface"])
         write_csv(folder / f"{run.name}_receptors.csv", tables["receptors"])
-        if out.pvd if out.pvd is not None else len(run.steps) <= 20:
+        if writes_pvd(out, len(run.steps)):
             _write_pvd(folder, run, scene_run)
     write_json(folder / "run.json", run_record(model_dir, scene_run))
     return written
@@ -150,8 +160,25 @@ def run_tables(run, scene_run) -> dict:
     return {"steps": columns_of(rows), "surface": surface, "receptors": receptors, "values": values}
 
 
+def pvd_times(run) -> tuple[list[float], str]:
+    """(timestep value per indentation, its meaning) of an experiment's PVD series: the offset
+    along the sweep axis [mm] for a sweep, else the depth reached [mm] (prescribed, or found under
+    force control); the step index when those do not increase strictly (a sweep at several loads,
+    repeated depths)."""
+    exp = run.experiment
+    if exp.sweep is not None:
+        axis = exp.sweep[0]
+        values, meaning = [float(off[axis]) for off, _ in run.steps], f"{'xyz'[axis]} offset of the sweep in mm"
+    else:
+        values, meaning = [float(r.depth_mm.max()) for _, r in run.steps], "depth reached in mm"
+    if any(b <= a for a, b in zip(values, values[1:])):
+        return [float(i) for i in range(len(run.steps))], "step index"
+    return values, meaning
+
+
 def _write_pvd(folder, run, scene_run) -> None:
-    """<name>_<step>.vtu with the full fields of every indentation and the <name>.pvd series."""
+    """<name>_<step>.vtu with the full fields of every indentation and the <name>.pvd series, its
+    timestep values as `pvd_times` says."""
     from fem.export import write_vtu
 
     comp = scene_run.contact.compliance(run.indentor.approach)
@@ -159,8 +186,10 @@ def _write_pvd(folder, run, scene_run) -> None:
     for i, (_, r) in enumerate(run.steps):
         names.append(f"{run.name}_{i:03d}.vtu")
         write_vtu(folder / names[-1], scene_run.model.solution(comp.displacement(r.force_N)))
-    entries = "\n".join(f'    <DataSet timestep="{i}" file="{n}"/>' for i, n in enumerate(names))
+    times, meaning = pvd_times(run)
+    entries = "\n".join(f'    <DataSet timestep="{t:.9g}" file="{n}"/>' for t, n in zip(times, names))
     (folder / f"{run.name}.pvd").write_text('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
+                                            f"  <!-- timestep: {meaning} -->\n"
                                             f"  <Collection>\n{entries}\n  </Collection>\n</VTKFile>\n")
 
 
@@ -249,6 +278,10 @@ class IndentRun:
                 "values": {h: cols[h] for h in header if h not in RECEPTOR_COLUMNS}, "steps": steps}
         self._cache[stimulus] = data
         return data
+
+    def steps(self, stimulus) -> list[dict]:
+        """Rows of `<stimulus>.csv`, one per indentation ({column: text})."""
+        return self._load(stimulus)["steps"]
 
     def positions(self, stimulus) -> np.ndarray:
         """(k,) stimulus offsets of the sweep (mm)."""

@@ -31,6 +31,9 @@ import numpy as np
 
 from common.errors import InputError
 from fem.contact import MAX_DEPTH_MM
+from fem.indentors import orientation_deg, shapes_for
+from fem.materials import Material
+from fem.measures import check_names
 from fem.receptors import DEFAULT_DEPTHS_MM, DEFAULT_MEASURES
 
 AXES = {"x": 0, "y": 1, "z": 2}
@@ -143,7 +146,20 @@ def _line(value, key, where):
 
 def _sweep(value, key, where):
     axis, offsets = parse_sweep(value)
+    _finite(offsets, key, where)
     return axis, tuple(float(v) for v in offsets)
+
+
+def _finite(values, key, where, low=None, strict=False):
+    """Raise InputError unless every value is finite and above `low` (strict: > low, else >= low)."""
+    v = np.atleast_1d(np.asarray(values, float))
+    bad = ~np.isfinite(v)
+    if low is not None:
+        bad |= (v <= low) if strict else (v < low)
+    if not len(v) or bad.any():
+        want = "finite" + ("" if low is None else f" and {'>' if strict else '>='} {low:g}")
+        shown = values[0] if isinstance(values, tuple) and len(values) == 1 else values
+        raise InputError(f"{where} {key} must be {want}, got {shown!r}")
 
 
 def _key(unit: str, parse, default=None, doc: str = "", toml: str | None = None):
@@ -183,7 +199,14 @@ class Receptors:
 
     @classmethod
     def from_dict(cls, table) -> Receptors:
-        return cls(**_parse_table(cls, table, "[receptors]"))
+        kw = _parse_table(cls, table, "[receptors]")
+        if "depths_mm" in kw:
+            _finite(kw["depths_mm"], "depths_mm", "[receptors]", 0.0)
+        if "spacing_mm" in kw:
+            _finite(kw["spacing_mm"], "spacing_mm", "[receptors]", 0.0, strict=True)
+        if "measures" in kw:
+            check_names(kw["measures"])
+        return cls(**kw)
 
 
 @dataclass(frozen=True)
@@ -222,7 +245,23 @@ class Experiment:
             raise InputError(f"experiment '{kw['name']}': give its indentor (a fem.indentors code)")
         if ("depth_mm" in kw) == ("force_N" in kw):
             raise InputError(f"experiment '{kw['name']}': give depth_mm or force_N (one of them)")
+        where = f"experiment '{kw['name']}'"
+        shapes_for(kw["indentor"])
+        orientation_deg(kw.get("orientation", "parallel"))
+        for key, low, strict in (("depth_mm", 0.0, False), ("force_N", 0.0, True),
+                                 ("max_depth_mm", 0.0, True), ("incline_deg", None, False)):
+            if key in kw:
+                _finite(kw[key], key, where, low, strict)
         return cls(**kw)
+
+    def check_dim(self, dim: int) -> None:
+        """Raise InputError for what a model of `dim` (2 or 3) cannot do: a 2D (plane-strain)
+        model has its indentors along the finger axis only, and no z sweep."""
+        if dim == 2 and orientation_deg(self.orientation) != 0:
+            raise InputError(f"experiment '{self.name}': orientation {self.orientation!r} on a 2D model; "
+                             "2D (plane-strain) indentors lie along the finger axis: use parallel")
+        if dim == 2 and self.sweep is not None and self.sweep[0] == 2:
+            raise InputError(f"experiment '{self.name}': a z sweep on a 2D model; sweep along x (x=start:stop:step)")
 
     @property
     def loads(self) -> list[dict]:
@@ -260,7 +299,14 @@ class Scene:
             raise InputError(f"{source} has no [[experiment]] table")
         if not isinstance(tables, list):
             raise InputError("scene experiment: expected [[experiment]] tables")
+        if "material" in kw or "nu" in kw:
+            Material(kw.get("material", "m33338"), kw.get("nu", 0.48))      # the code's form and nu's range
         return cls(experiments=tuple(Experiment.from_dict(t, k) for k, t in enumerate(tables)), **kw)
+
+    def check_dim(self, dim: int) -> None:
+        """Raise InputError if an experiment cannot run on a model of `dim` (`Experiment.check_dim`)."""
+        for exp in self.experiments:
+            exp.check_dim(dim)
 
 
 def load_scene(path) -> Scene:
@@ -270,6 +316,6 @@ def load_scene(path) -> Scene:
     try:
         with open(path, "rb") as fh:
             d = tomllib.load(fh)
-    except (OSError, tomllib.TOMLDecodeError) as exc:
-        raise InputError(f"cannot read scene '{path}': {exc}") from None
+    except (OSError, ValueError) as exc:             # TOMLDecodeError, UnicodeDecodeError are ValueErrors
+        raise InputError(f"cannot read scene '{path}': {' '.join(str(exc).split())}") from None
     return Scene.from_dict(d, f"scene '{path}'")

@@ -9,6 +9,8 @@ compliance of chosen nodes along a direction (from the factorisation's Schur com
     u = system.u0 + system.solve(f)            # superposition; system.residual = last relative residual
     system = model.system(prescribed, condense=(nodes, direction))     # + exact compliance block:
     system.compliance(nodes, direction)        # (k, k) [mm/N] along direction, no solves
+    system.solve_condensed(nodes, direction)   # (ndof, k) fields of unit forces there: backward
+                                               # substitution only
 """
 from __future__ import annotations
 
@@ -25,7 +27,8 @@ class LinearSystem:
 
     Attributes: `fixed` (m,), `free` (ndof - m,) DOF indices; `values` (m,) prescribed
     displacements [mm]; `u0` (ndof,) response to them with no load; `residual` relative
-    residual ||K_ff x - b|| / ||b|| of the last solve; `backend` ("pardiso" or "scipy-splu").
+    residual ||K_ff x - b|| / ||b|| of the last solve; `refined` whether the last
+    `solve_condensed` refined with gain; `backend` ("pardiso" or "scipy-splu").
     """
 
     def __init__(self, model, fixed: np.ndarray, values: np.ndarray, factor: SaddleFactor):
@@ -37,6 +40,7 @@ class LinearSystem:
         self._b0 = -(model.K @ self.u0)[self.free]      # load on the free DOFs from the prescribed values
         self.u0[self.free] = self._solve_free(self._b0) if np.any(values) else 0.0
         self.residual_u0 = self.residual if np.any(values) else 0.0
+        self.refined = False
 
     def _solve_free(self, b):
         x = self._factor(b)
@@ -98,6 +102,35 @@ class LinearSystem:
         C = np.zeros((len(nodes), len(nodes)))
         C[np.ix_(i, i)] = block[np.ix_(order, order)]
         return C
+
+    def solve_condensed(self, nodes, direction, check: bool = True) -> np.ndarray:
+        """(ndof, k) displacement [mm] for a unit force [N] along the unit `direction` at each of the
+        P2 nodes (k,), zero on `fixed`: `solve` of those loads, but with the loads on condensed
+        unknowns only the backward substitution runs (`fem.linalg.SaddleFactor.solve_condensed`).
+        Nodes held along the direction give zero columns. check: residual check and refinement
+        as `solve` (sets `residual` and `refined`: refinement steps were taken and gained);
+        False skips both (`residual` NaN, e.g. once a checked block showed they are not needed).
+        Raises ValueError unless every node is `stored`."""
+        pos, inside, held = self._stored(nodes, direction)
+        if not (inside | held).all():
+            raise ValueError(f"{int((~(inside | held)).sum())} of the nodes are not condensed along "
+                             f"{np.round(direction, 6).tolist()}: factorise with condense=")
+        i = np.flatnonzero(inside)
+        tol = self._factor.refine_tol
+        u = np.zeros((self.model.ndof, len(pos)))
+        if len(i):
+            along = self.condensed[1]                   # a condensed unknown is the DOF along a
+            axis = np.flatnonzero(np.abs(along) > 1 - 1e-12)    # coordinate axis, else along itself
+            unit = np.eye(self.model.dim)[axis[0]] if axis.size else along
+            sign = np.sign(np.asarray(direction, float)[:self.model.dim] @ unit)
+            u[np.ix_(self.free, i)] = sign * self._factor.solve_condensed(self._factor.condensed_order[pos[i]], check)
+        f = self._factor
+        self.residual = f.last_residual if len(i) else 0.0
+        self.refined = bool(len(i) and f.refinements > 0 and f.refine_tol == tol)
+        if self.residual > 1e-6:
+            warnings.warn(f"linear solve residual {self.residual:.1e} is large: the model is nearly "
+                          "singular or badly conditioned", stacklevel=2)
+        return u
 
     def displacement(self, f: np.ndarray | None = None) -> np.ndarray:
         """u0 + solve(f); sets `residual` to that of the combined system."""

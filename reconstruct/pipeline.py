@@ -14,6 +14,9 @@ from common.errors import InputError
 from common.staging import staged_output, write_json
 from reconstruct.sections import (N_POINTS, choose_levels, convex_section, fit_support, harmonics_for,
                                   support_curve, support_samples, support_values, tangent_polygon)
+from reconstruct.camera import Camera, border_tables, perspective_fit
+from reconstruct.lens import calibrate_lens, undistort_borders
+from reconstruct.checks import CUT_TOL_PX, TANGENT_TOL_PX, check_parallel, consistent_sections
 from reconstruct.silhouette import Borders, extract_borders
 from reconstruct.surface import loft
 from reconstruct.turntable import Turntable, load_turntable
@@ -37,6 +40,7 @@ class Reconstruction:
     timings_s: dict
     turned_180: bool = False              # the rod entered from the top: images were turned
     warnings: list[str] = field(default_factory=list)
+    camera: dict = field(default_factory=dict)   # pinhole camera and lens (empty: parallel projection)
 
     def summary(self) -> str:
         sc, fr, t = self.frame.scale, self.frame, self.table
@@ -49,12 +53,49 @@ class Reconstruction:
             f"from centre, tilt {fr.tilt_deg:+.3f} deg (fit rms {self.axis_fit.get('axis_fit_rms_mm', 0) * 1000:.1f} um)",
             f"sections        {len(self.z_mm)}, z {self.z_mm[0]:.2f} .. {self.z_mm[-1]:.2f} mm, "
             f"spacing {dz.min():.2f} .. {dz.max():.2f} mm",
+            f"camera          {self.camera_text()}",
             "trimmed         " + "; ".join(f"{k}: {v}" for k, v in self.trims.items()),
             f"surface         {len(self.surface.faces)} triangles, volume {self.surface.volume:.1f} mm^3, "
             f"watertight {self.surface.is_watertight}",
             "timings         " + ", ".join(f"{k} {v:.2f} s" for k, v in self.timings_s.items()),
         ]
         return "\n".join(lines + [f"warning: {w}" for w in self.warnings])
+
+
+    def camera_text(self) -> str:
+        """One line: the camera model used and where its distance came from."""
+        c = self.camera
+        if not c:
+            return "parallel projection (no camera_distance_mm, no checkerboard/)"
+        text = f"pinhole, {c['camera_distance_mm']:.1f} mm from the rotation axis ({c['camera_distance_source']})"
+        if "distortion" in c:
+            k1, k2, p1, p2 = c["distortion"][:4]
+            text += (f"; lens from {c['lens_photos']} checkerboard photos ({c['lens_rms_px']:.3f} px rms): "
+                     f"focal length {c['camera_matrix_px'][0][0]:.1f} px, k1 {k1:+.4f}, k2 {k2:+.4f}, "
+                     f"p1 {p1:+.5f}, p2 {p2:+.5f}")
+        return text
+
+
+def _camera(table: Turntable, lens, scale, turned: bool) -> tuple[Camera | None, dict]:
+    """The pinhole camera (None: parallel projection) and its record for the summary and
+    sections.json. The distance is the manifest's camera_distance_mm or, without it, the
+    checkerboard focal length (px) times the template's mm/px in the plane of the axis."""
+    if lens is None:
+        if table.camera_distance_mm is None:
+            return None, {}
+        return Camera(table.camera_distance_mm), {"camera_distance_mm": table.camera_distance_mm,
+                                                  "camera_distance_source": "camera_distance_mm in turntable.toml"}
+    (fx, fy) = lens.focal_px
+    from_lens = 0.5 * (fx * scale.sx_mm + fy * scale.sy_mm)
+    if table.camera_distance_mm is None:
+        distance, source = from_lens, "checkerboard focal length x template scale"
+    else:
+        distance = table.camera_distance_mm
+        source = f"camera_distance_mm in turntable.toml; the checkerboard gives {from_lens:.1f} mm"
+    record = {"camera_distance_mm": distance, "camera_distance_source": source,
+              "camera_distance_from_lens_mm": from_lens, "camera_matrix_px": lens.matrix.tolist(),
+              "distortion": lens.dist.tolist(), "lens_rms_px": lens.rms_px, "lens_photos": lens.photos}
+    return Camera(distance, (lens.turned180() if turned else lens).principal_px), record
 
 
 def _rotate180(b: Borders, width_px: int) -> Borders:
@@ -69,17 +110,28 @@ def extract_all(table: Turntable, progress: bool = False) -> list[Borders]:
     from threadpoolctl import threadpool_limits
 
     def one(path):
-        return extract_borders(table.read(path), name=path.name)
+        b = extract_borders(table.read(path), name=path.name)
+        if not np.isfinite(b.left_px).any():
+            raise InputError(f"the finger touches the image frame on every row of {path.name}: "
+                             f"zoom out or re-centre it")
+        return b
 
-    with ThreadPoolExecutor(max_workers=2) as pool, threadpool_limits(limits=1, user_api="blas"):
-        it = pool.map(one, table.image_paths)
-        return list(tqdm(it, total=len(table.image_paths), desc="silhouettes", unit="view",
-                         disable=not progress))
+    # the bar appears only after a short delay and is closed on any error, so a refusal found in
+    # the first views prints nothing but its error line
+    with ThreadPoolExecutor(max_workers=2) as pool, threadpool_limits(limits=1, user_api="blas"), \
+            tqdm(total=len(table.image_paths), desc="silhouettes", unit="view", delay=0.5,
+                 disable=not progress) as bar:
+        views = []
+        for b in pool.map(one, table.image_paths):
+            views.append(b)
+            bar.update()
+        return views
 
 
 def _trim(s: np.ndarray, width: np.ndarray, rod: bool, tip_fraction: float, ds: float,
-          sy: float) -> tuple[float, float, dict]:
-    """Axial range [s_lo, s_hi] to keep, from the widest-view width profile (NaN: not usable)."""
+          sy: float, margin_px: float = ROD_MARGIN_PX) -> tuple[float, float, dict]:
+    """Axial range [s_lo, s_hi] to keep, from the widest-view width profile (NaN: not usable);
+    margin_px: rows skipped after the rod-to-finger step."""
     valid = np.isfinite(width)
     if not valid.any():
         raise InputError("the finger touches the image frame on every row: zoom out or re-centre it")
@@ -97,7 +149,7 @@ def _trim(s: np.ndarray, width: np.ndarray, rod: bool, tip_fraction: float, ds: 
         rod_w = np.median(width[: max(3, int(0.3 / ds))])
         if rod_w < 0.5 * w_max:
             body = np.flatnonzero(width > 1.5 * rod_w)
-            lo = body[0] + int(np.ceil(ROD_MARGIN_PX * sy / ds))
+            lo = body[0] + int(np.ceil(margin_px * sy / ds))
             trims["rod"] = f"{rod_w:.2f} mm wide, below s {s[lo]:.2f} mm"
     if lo == 0 and tip_fraction > 0:
         wide = np.flatnonzero(width >= tip_fraction * w_max)
@@ -126,13 +178,18 @@ def reconstruct(table: Turntable, spacing_mm=(0.5, 2.0), tol_mm: float = 0.02,
     if not 0 <= tip_fraction < 1:
         raise InputError(f"--tip-fraction must be in [0, 1), got {tip_fraction}")
     timings, warnings = {}, []
+    lens = None
+    if table.checkerboard_paths:
+        t0 = time.perf_counter()
+        lens = calibrate_lens([(p.name, table.read(p)) for p in table.checkerboard_paths],
+                              table.checkerboard_inner_corners, table.checkerboard_square_mm)
+        timings["lens"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     calib = extract_borders(table.read(table.calibration_path), name=table.calibration_path.name)
     views = extract_all(table, progress)
-    for path, b in zip(table.image_paths, views):
-        if not np.isfinite(b.left_px).any():
-            raise InputError(f"the finger touches the image frame on every row of {path.name}: "
-                             f"zoom out or re-centre it")
+    if lens is not None:                  # border points into the ideal pinhole image
+        calib = undistort_borders(calib, lens)
+        views = [undistort_borders(b, lens) for b in views]
     timings["silhouettes"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
@@ -145,6 +202,7 @@ def reconstruct(table: Turntable, spacing_mm=(0.5, 2.0), tol_mm: float = 0.02,
         calib = _rotate180(calib, width_px)
     rod = max(top, bottom) > len(views) // 2
     scale = template_scale(calib, table.template_diameter_mm)
+    camera, camera_record = _camera(table, lens, scale, turned)
     frame = Frame(scale, height_px)
     if table.axis_offset_px is not None or table.tilt_deg is not None:
         frame.x0_mm = (width_px / 2 + float(table.axis_offset_px or 0.0)) * scale.sx_mm
@@ -160,27 +218,74 @@ def reconstruct(table: Turntable, spacing_mm=(0.5, 2.0), tol_mm: float = 0.02,
     t0 = time.perf_counter()
     ds = scale.sy_mm
     s_fine = np.arange(0.0, height_px * scale.sy_mm, ds)
-    left, right = sample_borders(views, frame, s_fine)
-    width = np.where(np.isfinite(left).all(axis=0) & np.isfinite(right).all(axis=0),
-                     np.max(right - left, axis=0), np.nan)
-    s_lo, s_hi, trims = _trim(s_fine, width, rod, tip_fraction, ds, scale.sy_mm)
-    inside = (s_fine >= s_lo) & (s_fine <= s_hi)
     theta = table.angles_deg - table.volar_view_deg
-    phi, h = support_samples(left[:, inside], right[:, inside], theta)
-    k_max = harmonics_for(phi)
-    coef_fine = fit_support(phi, h, k_max)
     dirs = np.linspace(0, 2 * np.pi, 180, endpoint=False)
-    levels = choose_levels(s_fine[inside], support_values(coef_fine, dirs), spacing_mm, tol_mm)
-    left_l, right_l = sample_borders(views, frame, levels)
-    phi, h_l = support_samples(left_l, right_l, theta)
-    curves = support_curve(fit_support(phi, h_l, k_max), N_POINTS)
+    if camera is None:
+        left, right = sample_borders(views, frame, s_fine)
+        width = np.where(np.isfinite(left).all(axis=0) & np.isfinite(right).all(axis=0),
+                         np.max(right - left, axis=0), np.nan)
+        s_lo, s_hi, trims = _trim(s_fine, width, rod, tip_fraction, ds, scale.sy_mm)
+        inside = (s_fine >= s_lo) & (s_fine <= s_hi)
+        phi, h = support_samples(left[:, inside], right[:, inside], theta)
+        k_max = harmonics_for(phi)
+        coef_fine = fit_support(phi, h, k_max)
+        levels = choose_levels(s_fine[inside], support_values(coef_fine, dirs), spacing_mm, tol_mm)
+        left_l, right_l = sample_borders(views, frame, levels)
+        phi, h_l = support_samples(left_l, right_l, theta)
+        coef_l = fit_support(phi, h_l, k_max)
+        rms_l = np.sqrt(np.mean((support_values(coef_l, phi).T - h_l) ** 2, axis=0))
+        phi_l = np.repeat(phi[:, None], len(levels), axis=1)
+        parallel = check_parallel(views, frame, theta, levels, k_max, rms_l, width_px)
+        if parallel:
+            warnings.append(parallel)
+    else:
+        k_max = harmonics_for(support_samples(np.zeros((len(views), 1)), np.zeros((len(views), 1)), theta)[0])
+        tables = border_tables(views, frame)
+        coef_f, phi_f, h_f, rms_f = perspective_fit(views, frame, camera, width_px, theta, s_fine, k_max,
+                                                    tables=tables)
+        n = len(views)
+        width = np.where(np.isfinite(h_f).all(axis=0), np.max(h_f[:n] + h_f[n:], axis=0), np.nan)
+        s_lo, s_hi, trims = _trim(s_fine, width, rod, tip_fraction, ds, scale.sy_mm, margin_px=0.0)
+        # the rim of the proximal cut is seen below the cut in perspective, and its tangents
+        # disagree by many px: the cut (z = 0) is where they stop doing so; the first section lies
+        # ROD_MARGIN_PX past it (as in the parallel path: closer to the blurred corner of the cut
+        # the tangents agree but are off by up to 1 px) where the tangents agree to TANGENT_TOL_PX
+        rms_px = np.nan_to_num(rms_f / scale.sx_mm, nan=np.inf)
+        ok = rms_px <= TANGENT_TOL_PX
+        i_lo, i_hi = np.searchsorted(s_fine, s_lo), np.searchsorted(s_fine, s_hi, side="right") - 1
+        while i_lo < i_hi and rms_px[i_lo] > CUT_TOL_PX:
+            i_lo += 1
+        i_first = i_lo + int(np.ceil(ROD_MARGIN_PX * scale.sy_mm / ds))     # past the blurred corner
+        while i_first < i_hi and not ok[i_first:i_first + 3].all():
+            i_first += 1
+        while i_hi > i_first and not ok[i_hi - 2:i_hi + 1].all():
+            i_hi -= 1
+        parts = [f"s {a:.2f} .. {b:.2f} mm" for a, b in ((s_lo, s_fine[i_first]), (s_fine[i_hi], s_hi)) if b > a]
+        if parts:
+            trims["tangents disagree"] = " and ".join(parts) + " along the axis"
+        s_lo, s_first, s_hi = float(s_fine[i_lo]), float(s_fine[i_first]), float(s_fine[i_hi])
+        if s_hi - s_first < 2 * ds:
+            raise InputError("the tangents of the views disagree on every section: check camera_distance_mm "
+                             "in turntable.toml and the images")
+        inside = (s_fine >= s_first) & (s_fine <= s_hi)
+        levels = choose_levels(s_fine[inside], support_values(coef_f[:, inside], dirs), spacing_mm, tol_mm)
+        coef_l, phi_l, h_l, rms_l = perspective_fit(views, frame, camera, width_px, theta, levels, k_max,
+                                                    tables=tables)
+    curves = support_curve(coef_l, N_POINTS)
+    keep, note = consistent_sections(levels - s_lo, curves, rms_l / scale.sx_mm, scale.sx_mm)
+    if note:
+        warnings.append(note)
+    levels, curves, coef_l, phi_l, h_l = levels[keep], curves[keep], coef_l[:, keep], phi_l[:, keep], h_l[:, keep]
     sections = [convex_section(c) for c in curves]
-    polygons = [tangent_polygon(phi, h_l[:, i]) for i in range(len(levels))]
+    polygons = []
+    for i in range(len(levels)):
+        ok = np.isfinite(phi_l[:, i]) & np.isfinite(h_l[:, i])
+        polygons.append(tangent_polygon(phi_l[ok, i], h_l[ok, i]))
     z = levels - s_lo
     surface = loft(z, sections)
     timings["sections"] = time.perf_counter() - t0
     return Reconstruction(table, frame, z, sections, polygons, surface, s_lo, trims, axis_fit,
-                          timings, turned, warnings)
+                          timings, turned, warnings, camera_record)
 
 
 def sections_document(rec: Reconstruction) -> dict:
@@ -199,6 +304,7 @@ def sections_document(rec: Reconstruction) -> dict:
             "z_offset_mm": rec.z_offset_mm,
             "z_offset_note": "z = 0 lies z_offset_mm along the axis from where it crosses the bottom "
                              "image edge (after turning the images so the rod is at the bottom)",
+            **rec.camera,
         },
         "views": len(t.image_paths),
         "angles_deg": t.angles_deg.tolist(),
@@ -216,7 +322,8 @@ def input_hash(table: Turntable, options: dict) -> str:
 
     digest = hashlib.sha256(repr(sorted(options.items())).encode())
     manifest = table.folder / "turntable.toml"
-    for path in [*table.image_paths, table.calibration_path] + ([manifest] if manifest.exists() else []):
+    for path in [*table.image_paths, table.calibration_path, *table.checkerboard_paths] + \
+            ([manifest] if manifest.exists() else []):
         digest.update(path.name.encode())
         digest.update(path.read_bytes())
     return digest.hexdigest()[:16]

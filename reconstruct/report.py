@@ -33,15 +33,17 @@ def write_report(rec, path) -> None:
         row = fr.height_px - 0.5 - (z + rec.z_offset_mm) / fr.scale.sy_mm
         a.axhline(row, color="y", lw=0.6)
     a.set_title(f"{t.image_paths[i].name}: border and axis (yellow: kept z range)", fontsize=9)
+    a.set_xlabel("image column (px)"), a.set_ylabel("image row (px)")
     a.legend(fontsize=7, loc="lower right")
 
     a = ax[0, 1]
     a.hist(img.ravel(), bins=256, range=(0, 256), color="0.3", log=True)
     a.axvline(b.threshold, color="b", label=f"Otsu level {b.threshold:.0f}")
     a.axvline(0.5 * (b.background + b.object), color="r", ls="--",
-              label=f"50 % level at the centre (background {b.background:.0f}, object {b.object:.0f}; "
-                    f"it follows the lighting across the image)")
-    a.set_xlabel("grey level"), a.set_ylabel("pixels"), a.legend(fontsize=7)
+              label=f"50 % level at the centre\n(background {b.background:.0f}, object {b.object:.0f};\n"
+                    f"it follows the lighting)")
+    a.set_xlabel("grey level"), a.set_ylabel("pixels")
+    a.legend(fontsize=7, loc="upper center", framealpha=0.9)
     a.set_title("grey-level histogram of that view", fontsize=9)
 
     a = ax[0, 2]

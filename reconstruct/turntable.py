@@ -4,7 +4,11 @@ Folder contract: images (png/tif/tiff/jpg/jpeg/bmp) of one size; `calibration.*`
 (template image); optional `turntable.toml` with `start_deg` + `step_deg` (angle of the i-th
 view in sorted name order) or an `[angles]` table (file name -> degrees),
 `template_diameter_mm` (default 12.7), `axis` ("vertical" or "horizontal"), `volar_view_deg`
-(default 0). Without a manifest the angles come from names like `view_012.6deg.png`.
+(default 0), `camera_distance_mm` (a pinhole camera that far from the rotation axis; default: a
+parallel projection). Without a manifest the angles come from names like `view_012.6deg.png`.
+An optional `checkerboard/` folder holds photos of a printed checkerboard taken with the same
+camera and lens (lens calibration, reconstruct.lens); it needs `checkerboard_inner_corners`
+([per row, per column]) and `checkerboard_square_mm` in the manifest.
 """
 from __future__ import annotations
 
@@ -18,11 +22,41 @@ import numpy as np
 from PIL import Image
 
 from common.errors import InputError
+from reconstruct.lens import MIN_PHOTOS
 
 IMAGE_SUFFIXES = {".png", ".tif", ".tiff", ".jpg", ".jpeg", ".bmp"}
 _ANGLE_IN_NAME = re.compile(r"(-?\d+(?:\.\d+)?)\s*deg", re.IGNORECASE)
-_MANIFEST_KEYS = {"start_deg", "step_deg", "angles", "template_diameter_mm", "axis",
-                  "volar_view_deg", "axis_offset_px", "tilt_deg"}
+_NUMBER, _TEXT, _TABLE, _PAIR = "a number", "a text in quotes", "a table of file name = degrees", \
+    "a list of two whole numbers, e.g. [9, 6]"
+#: every manifest key and the TOML type it must have
+_MANIFEST_TYPES = {"start_deg": _NUMBER, "step_deg": _NUMBER, "angles": _TABLE,
+                   "template_diameter_mm": _NUMBER, "axis": _TEXT, "volar_view_deg": _NUMBER,
+                   "axis_offset_px": _NUMBER, "tilt_deg": _NUMBER, "camera_distance_mm": _NUMBER,
+                   "checkerboard_inner_corners": _PAIR, "checkerboard_square_mm": _NUMBER}
+_MANIFEST_KEYS = set(_MANIFEST_TYPES)
+
+
+def _is_number(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and bool(np.isfinite(v))
+
+
+def _check_types(manifest: dict, path: Path) -> None:
+    """One InputError naming the first key whose value has the wrong TOML type."""
+    for key, want in _MANIFEST_TYPES.items():
+        if key not in manifest:
+            continue
+        v = manifest[key]
+        if want == _NUMBER:
+            ok = _is_number(v)
+        elif want == _TEXT:
+            ok = isinstance(v, str)
+        elif want == _PAIR:
+            ok = (isinstance(v, list) and len(v) == 2
+                  and all(isinstance(x, int) and not isinstance(x, bool) for x in v))
+        else:
+            ok = isinstance(v, dict) and all(_is_number(x) for x in v.values())
+        if not ok:
+            raise InputError(f"{path}: {key} must be {want}, not {v!r}")
 
 
 @dataclass
@@ -39,6 +73,10 @@ class Turntable:
     size_px: tuple[int, int] = (0, 0)       # (W, H) as stored on disk
     axis_offset_px: float | None = None     # manifest override of the estimated axis
     tilt_deg: float | None = None
+    camera_distance_mm: float | None = None  # pinhole camera this far from the axis; None: parallel
+    checkerboard_paths: tuple[Path, ...] = ()     # photos of the lens-calibration board
+    checkerboard_inner_corners: tuple[int, int] | None = None
+    checkerboard_square_mm: float | None = None
 
     @property
     def coverage_deg(self) -> float:
@@ -84,6 +122,7 @@ def _read_manifest(folder: Path) -> dict:
     unknown = set(manifest) - _MANIFEST_KEYS
     if unknown:
         raise InputError(f"{path}: unknown key(s) {sorted(unknown)}; known keys: {sorted(_MANIFEST_KEYS)}")
+    _check_types(manifest, path)
     return manifest
 
 
@@ -135,13 +174,55 @@ def load_turntable(folder) -> Turntable:
         raise InputError(f"turntable.toml: template_diameter_mm must be positive, not {diameter}")
     table = Turntable(folder, views, angles, calib[0], diameter, axis,
                       float(manifest.get("volar_view_deg", 0.0)), next(iter(sizes)),
-                      manifest.get("axis_offset_px"), manifest.get("tilt_deg"))
+                      manifest.get("axis_offset_px"), manifest.get("tilt_deg"),
+                      manifest.get("camera_distance_mm"))
+    if table.camera_distance_mm is not None and not table.camera_distance_mm > 0:
+        raise InputError(f"turntable.toml: camera_distance_mm must be positive (mm from the camera's "
+                         f"centre to the rotation axis), not {table.camera_distance_mm}")
+    table.checkerboard_paths, table.checkerboard_inner_corners, table.checkerboard_square_mm = \
+        _checkerboard(folder, manifest, next(iter(sizes)))
     if len(views) < 4:
         raise InputError(f"only {len(views)} view(s) in '{folder}': take at least 4 (about 100 over 360 deg)")
     if table.coverage_deg < 180.0 - 1e-6:
         raise InputError(f"the views cover only {table.coverage_deg:.1f} deg of rotation: at least 180 deg "
                          f"are needed (360 recommended)")
     return table
+
+
+def _checkerboard(folder: Path, manifest: dict, size: tuple[int, int]):
+    """Photos, inner corners and square size of the lens-calibration board (checkerboard/), or
+    ((), None, None) without one; every problem is an InputError."""
+    keys = ("checkerboard_inner_corners", "checkerboard_square_mm")
+    sub = folder / "checkerboard"
+    if not sub.is_dir():
+        if any(k in manifest for k in keys):
+            raise InputError(f"turntable.toml gives {' and '.join(k for k in keys if k in manifest)} but "
+                             f"'{folder}' has no checkerboard/ folder: add the board photos there or remove the key(s)")
+        return (), None, None
+    missing = [k for k in keys if k not in manifest]
+    if missing:
+        raise InputError(f"'{sub}' needs {' and '.join(missing)} in {folder}/turntable.toml, e.g. "
+                         f"checkerboard_inner_corners = [9, 6] (inner corners per row and column) and "
+                         f"checkerboard_square_mm = 2.0")
+    corners = tuple(manifest["checkerboard_inner_corners"])
+    square = float(manifest["checkerboard_square_mm"])
+    if min(corners) < 2 or not square > 0:
+        raise InputError(f"turntable.toml: checkerboard_inner_corners must be at least [2, 2] and "
+                         f"checkerboard_square_mm positive, not {list(corners)} and {square}")
+    photos = sorted(p for p in sub.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+    if len(photos) < MIN_PHOTOS:
+        raise InputError(f"only {len(photos)} photo(s) in '{sub}': take at least {MIN_PHOTOS} (about 10) of the "
+                         f"board, tilted differently in each")
+    for p in photos:
+        try:
+            with Image.open(p) as img:
+                other = img.size
+        except (OSError, ValueError):
+            raise InputError(f"cannot read image '{p}': replace or remove the file") from None
+        if other != size:
+            raise InputError(f"checkerboard photo '{p.name}' is {other[0]}x{other[1]} px, the views "
+                             f"{size[0]}x{size[1]}: take the board photos with the same camera settings")
+    return tuple(photos), corners, square
 
 
 def _angles(views: list[Path], manifest: dict, folder: Path) -> np.ndarray:

@@ -287,7 +287,7 @@ def test_line_load_and_contact_series_commands(section, tmp_path):
     (["fit-material", "{model}"], "needs --deflection"),
     (["fit-material", "{model}", "--force", "{empty}"], "no data rows"),
     (["line-load", "{model}", "--depth", "0,1"], "give positive values"),
-    (["line-load", "{model}", "--depth", "1", "--step", "0"], "must be > 0 mm"),
+    (["line-load", "{model}", "--depth", "1", "--step", "0"], "--step: must be finite and > 0"),
     (["line-load", "{model}", "--material", "m433380"], "has 6 digits"),
     (["line-load", "{model}", "--depth", "a:b"], "bad value list"),
     (["contact-series", "{model}"], "needs --force or --depth"),

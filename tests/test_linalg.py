@@ -94,6 +94,53 @@ def test_model_compliance_is_the_dense_inverse_block(direction):
     np.testing.assert_allclose(C, expected, rtol=0, atol=1e-9 * np.abs(expected).max())
 
 
+def test_schur_row_loads_need_only_the_backward_substitution():
+    """Pardiso.solve_schur (S^-1 on the Schur rows, then phase 333) equals the dense solve of
+    loads on those rows, with S^-1 from the Cholesky factor and from schur_inverse."""
+    pytest.importorskip("pypardiso")
+    *_, A = _saddle(seed=7)
+    rows = np.array([2, 3, 9, 17, 25, 38])
+    pf = Pardiso(sp.triu(A, format="csr"), schur=rows)
+    bs = np.random.default_rng(8).standard_normal((len(rows), 4))
+    b = np.zeros((A.shape[0], 4))
+    b[rows] = bs
+    x = np.linalg.solve(A.toarray(), b)
+    np.testing.assert_allclose(pf.solve_schur(bs), x, rtol=0, atol=1e-10 * np.abs(x).max())
+    pf.schur_inverse()
+    np.testing.assert_allclose(pf.solve_schur(bs), x, rtol=0, atol=1e-10 * np.abs(x).max())
+    with pytest.raises(ValueError, match="no Schur"):
+        Pardiso(sp.triu(A, format="csr")).solve_schur(bs)
+
+
+@pytest.mark.parametrize("direction", [(0.0, -1.0, 0.0), (0.0, 1.0, 0.0), (0.6, -0.8, 0.0)])
+@pytest.mark.parametrize("check", [True, False])
+def test_solve_condensed_equals_the_plain_solve(direction, check):
+    """LinearSystem.solve_condensed: the fields of unit forces along the direction (either sign,
+    on an axis or rotated) at condensed nodes equal `solve` of those loads to 1e-10; a node held
+    along the direction gives a zero column; nodes not condensed are refused."""
+    pytest.importorskip("pypardiso")
+    g = np.linspace(0, 1, 3)
+    p, cells, regions = ref.box(g, g, g)
+    model = Model(p, cells, np.ones(len(cells)), regions, material="m43", nu=0.45)
+    top = model.region_nodes("ymax")
+    held = np.intersect1d(top, model.region_nodes("xmin"))[:1]
+    system = model.system({"ymin": 0.0, "xmin": 0.0}, condense=(top, direction))
+    nodes = np.r_[top[top != held[0]][::-1], held]          # any order, the held node last
+    a = np.asarray(direction)
+    loads = np.zeros((model.ndof, len(nodes)))
+    loads[model.node_dofs(nodes), np.arange(len(nodes))[:, None]] = a
+    u_ref = system.solve(loads)
+    u = system.solve_condensed(nodes, direction, check=check)
+    assert u.shape == u_ref.shape and not u[:, -1].any()
+    np.testing.assert_allclose(u, u_ref, rtol=0, atol=1e-10 * np.abs(u_ref).max())
+    assert (system.residual < 1e-10) if check else np.isnan(system.residual)
+    inner = np.setdiff1d(np.arange(len(model.nodes)), np.concatenate(
+        [top] + [model.region_nodes(r) for r in ("ymin", "xmin")]))[:2]
+    assert inner.size
+    with pytest.raises(ValueError, match="not condensed"):
+        system.solve_condensed(np.r_[top[:1], inner], direction)
+
+
 def test_factorisations_leave_the_environment_unchanged():
     pytest.importorskip("pypardiso")
     before = dict(os.environ)

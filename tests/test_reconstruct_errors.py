@@ -128,3 +128,39 @@ def test_bad_manifest_and_options(good, tmp_path, capsys):
     assert code == 2 and "spacing" in capsys.readouterr().err
     code = pipeline.main(["reconstruct", str(f), "--out", str(tmp_path / "out"), "--tip-fraction", "-1"])
     assert code == 2 and not (tmp_path / "out").exists()
+
+
+def test_wrong_manifest_types_name_the_key(good, tmp_path, capsys):
+    f = _copy(good, tmp_path)
+    for text, words in (('start_deg = "zero"\nstep_deg = 15\n', ("start_deg", "a number", "'zero'")),
+                        ('step_deg = 15\naxis = 3\n', ("axis", "text")),
+                        ('step_deg = 15\ncamera_distance_mm = "far"\n', ("camera_distance_mm", "number")),
+                        ('step_deg = 15\ncamera_distance_mm = -5\n', ("camera_distance_mm", "positive")),
+                        ('step_deg = 15\ncheckerboard_inner_corners = [9]\n', ("checkerboard_inner_corners",))):
+        (f / "turntable.toml").write_text(text)
+        _fails(f, capsys, tmp_path, *words)
+
+
+@pytest.mark.parametrize("command", ["reconstruct", "render"])
+def test_unusable_output_location_is_refused_first(good, tmp_path, capsys, command):
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    args = [str(good)] if command == "reconstruct" else ["sphere"]
+    for out, words in ((afile, ("existing file",)), ("/proc/x", ("cannot be created",))):
+        code = pipeline.main([command, *args, "--out", str(out)])
+        err = capsys.readouterr().err.strip()
+        assert code == 2 and err.startswith("error: --out") and "\n" not in err, err
+        assert all(w in err for w in words)
+    assert afile.read_text() == "x" and sorted(p.name for p in tmp_path.iterdir()) == ["afile"]
+
+
+def test_no_progress_before_an_error_and_summary_names_the_folder(good, tmp_path, capsys):
+    f = _copy(good, tmp_path)
+    cv2.imwrite(str(_views(f)[0]), np.full((260, 200), 240, np.uint8))
+    code = pipeline.main(["reconstruct", str(f), "--out", str(tmp_path / "out")])   # progress on
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("error:") == 1 and err.strip().splitlines()[-1].startswith("error: ")
+    assert "silhouettes" not in err, err
+    code = pipeline.main(["reconstruct", str(good), "--out", str(tmp_path / "ok")])
+    out = capsys.readouterr().out
+    assert code == 0 and f"written to      {tmp_path / 'ok'}/" in out

@@ -1,0 +1,140 @@
+"""Cohorts on Dask: wall time of a small cohort in this process and on 1 and 2 local workers, the
+per-task overhead of the scheduler, bytes shipped per task, the peak memory of a worker, and a
+projection of 100 subjects on 1, 10 and 100 workers from the measured task times and sizes.
+
+    python benchmarks/batch_bench.py                    # 2D cohort (4 subjects), about a minute
+    python benchmarks/batch_bench.py --with-3d          # also one coarse 3D subject (monkey, size 1.5)
+    python benchmarks/batch_bench.py --out benchmarks/results/batch_bench.md
+
+Each subject is one task (commands.batch.run_subject): a few hundred bytes of paths and options go
+to the worker, which reads and writes the subject's folder under the shared output folder.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import operator
+import platform
+import resource
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from commands.batch import MeshOptions, parse_subjects, run_subject, summary_table
+from common.distribute import Scheduler, TaskRunner
+from common.tables import csv_text
+
+SCENE = """\
+[receptors]
+depths_mm = [0.5, 1.0]
+spacing_mm = 1.0
+
+[output]
+plots = false
+pvd = false
+
+[[experiment]]
+name = "C5"
+indentor = "C5"
+depth_mm = "0.25:1:0.25"
+"""
+SUBJECTS_2D = ["preset:cylinder8", "preset:cylinder8:bone", "preset:cylinder16", "preset:square"]
+
+
+def measured(subject, out_dir, scene, mesh):
+    """run_subject plus the worker's peak resident memory (MB) and the task's own seconds."""
+    t0 = time.perf_counter()
+    result = run_subject(subject, out_dir, scene, mesh)
+    return {**result, "task_s": time.perf_counter() - t0,
+            "peak_rss_MB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+
+
+def cohort(words, scene, mesh, scheduler, work) -> dict:
+    """One cohort run on a fresh output folder: start-up, map seconds, per-task numbers."""
+    out = Path(tempfile.mkdtemp(dir=work))
+    subjects = parse_subjects(words)
+    calls = [(s, str(out), str(scene), mesh) for s in subjects]
+    t0 = time.perf_counter()
+    with TaskRunner(scheduler) as runner:
+        started = time.perf_counter() - t0
+        results = runner.map(measured, calls)
+        stats = runner.stats
+    errors = [r["error"] for r in results if r["error"]]
+    if errors:
+        raise SystemExit(f"a subject failed: {errors[0]}")
+    return {"scheduler": str(scheduler), "startup_s": started, "map_s": stats.seconds,
+            "total_s": time.perf_counter() - t0, "task_s": [r["task_s"] for r in results],
+            "task_bytes": stats.task_bytes, "result_bytes": stats.result_bytes,
+            "peak_rss_MB": max(r["peak_rss_MB"] for r in results),
+            "summary": csv_text(summary_table(results), nan="")}
+
+
+def overhead(scheduler, n: int = 40) -> float:
+    """Seconds per trivial task (operator.call(abs, -1)) on a running cluster, warm."""
+    with TaskRunner(scheduler) as runner:
+        runner.map(operator.call, [(abs, -1)] * 4)                   # warm up the workers
+        runner.map(operator.call, [(abs, -1)] * n)
+        return runner.stats.seconds / n
+
+
+def projection(task_s: float, task_bytes: float, result_bytes: float, per_task_s: float, startup_s: float,
+               n: int = 100, bandwidth: float = 100e6) -> list[tuple[int, float]]:
+    """Seconds for n subjects of task_s each on W workers: start-up + ceil(n / W) rounds of
+    (task + overhead) + the bytes through the scheduler at `bandwidth` B/s (they are small)."""
+    return [(w, (0.0 if w == 1 else startup_s) + math.ceil(n / w) * (task_s + (0.0 if w == 1 else per_task_s))
+             + n * (task_bytes + result_bytes) / bandwidth) for w in (1, 10, 100)]
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--with-3d", action="store_true", help="also time one coarse 3D subject (monkey, size 1.5)")
+    ap.add_argument("--out", help="write the Markdown report here (default: print it)")
+    args = ap.parse_args()
+    work = Path(tempfile.mkdtemp(prefix="batch_bench-"))
+    scene = work / "scene.toml"
+    scene.write_text(SCENE)
+    mesh = MeshOptions(size_mm=0.25)
+    runs = [cohort(SUBJECTS_2D, scene, mesh, s, work)
+            for s in (Scheduler(), Scheduler("local", 1), Scheduler("local", 2))]
+    same = len({r["summary"] for r in runs}) == 1
+    per_task = overhead(Scheduler("local", 2))
+    two = runs[2]
+    lines = [f"# batch_bench: cohorts on Dask ({platform.node()}, {platform.processor() or platform.machine()}, "
+             f"Python {platform.python_version()})", "",
+             f"Cohort: {len(SUBJECTS_2D)} 2D subjects ({', '.join(SUBJECTS_2D)}), mesh size 0.25 mm, one "
+             "experiment of 4 depths (C5). Every run starts from an empty output folder.", "",
+             "| scheduler | cluster start-up, s | map, s | total, s | mean task, s | bytes per task (call / result) "
+             "| worker peak RSS, MB |", "|---|---|---|---|---|---|---|"]
+    for r in runs:
+        lines.append(f"| {r['scheduler']} | {r['startup_s']:.2f} | {r['map_s']:.2f} | {r['total_s']:.2f} | "
+                     f"{statistics.mean(r['task_s']):.2f} | {statistics.mean(r['task_bytes']):.0f} / "
+                     f"{statistics.mean(r['result_bytes']):.0f} | {r['peak_rss_MB']:.0f} |")
+    lines += ["", f"summary.csv byte-identical across the three schedulers: {'yes' if same else 'NO'}", "",
+              f"Per-task overhead of the scheduler (trivial tasks, 2 warm local workers): {per_task * 1e3:.1f} ms", ""]
+    cases = [("2D subject", statistics.mean(two["task_s"][1:] or two["task_s"]), two)]
+    if args.with_3d:
+        r3 = cohort(["preset:monkey"], scene, MeshOptions(size_mm=1.5), Scheduler("local", 1), work)
+        lines += [f"One coarse 3D subject (preset:monkey, size 1.5 mm) on one local worker: task "
+                  f"{r3['task_s'][0]:.1f} s, worker peak RSS {r3['peak_rss_MB']:.0f} MB, "
+                  f"{r3['task_bytes'][0]} / {r3['result_bytes'][0]} bytes shipped.", ""]
+        cases.append(("3D subject (monkey, 1.5 mm)", r3["task_s"][0], r3))
+    lines += ["Projection for 100 subjects (start-up and overhead as measured; tasks of the measured mean "
+              "length; bytes at 100 MB/s):", "", "| subject | task, s | 1 worker, s | 10 workers, s | 100 workers, s |",
+              "|---|---|---|---|---|"]
+    for name, t, r in cases:
+        p = projection(t, statistics.mean(r["task_bytes"]), statistics.mean(r["result_bytes"]), per_task,
+                       two["startup_s"])
+        lines.append(f"| {name} | {t:.2f} | " + " | ".join(f"{s:.0f}" for _, s in p) + " |")
+    text = "\n".join(lines) + "\n"
+    if args.out:
+        Path(args.out).write_text(text)
+    print(text)
+
+
+if __name__ == "__main__":
+    main()

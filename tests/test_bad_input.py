@@ -1,0 +1,248 @@
+"""Bad input ends with one `error:` line, exit code 2, no traceback, nothing written, before any
+work (well under 2 s); a corrupt mesh cache entry is rebuilt; an interrupt ends with one line."""
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import pipeline
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA = ROOT / "data"
+REFUSAL_S = 2.0          # the issue's bound on a refusal: no meshing or factorising before it
+
+
+def cli(*argv) -> tuple[int, str, str, float]:
+    """pipeline.main in-process: (exit code, stdout, stderr, seconds)."""
+    out, err = io.StringIO(), io.StringIO()
+    t0 = time.perf_counter()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = pipeline.main([str(a) for a in argv])
+    return code, out.getvalue(), err.getvalue(), time.perf_counter() - t0
+
+
+def snapshot(*folders) -> set:
+    """Every path below the folders (to show that nothing was written)."""
+    return {p for f in folders if Path(f).exists() for p in Path(f).rglob("*")}
+
+
+def assert_refused(argv, watch, pattern=None):
+    """argv ends with exactly one `error:` line on stderr (matching `pattern`), exit 2, no
+    traceback, nothing new under `watch`, within REFUSAL_S."""
+    before = snapshot(*watch)
+    code, _, err, seconds = cli(*argv)
+    lines = err.strip().splitlines()
+    assert code == 2, (argv, code, err)
+    assert len(lines) == 1 and lines[0].startswith("error: "), (argv, err)
+    assert "Traceback" not in err
+    assert snapshot(*watch) == before, argv
+    assert seconds < REFUSAL_S, (argv, seconds)
+    if pattern is not None:
+        assert pattern in lines[0], lines[0]
+    return lines[0]
+
+
+@pytest.fixture(scope="module")
+def work(tmp_path_factory):
+    """A 2D cylinder8 model folder with a run folder of it, and an existing plain file."""
+    base = tmp_path_factory.mktemp("bad_input")
+    model = base / "cyl8"
+    assert cli("mesh", "--preset", "cylinder8", "--bone", "--out", model, "--quiet")[0] == 0
+    run = base / "run"
+    assert cli("indent", model, "--indentor", "C5", "--depth", "0.5", "--out", run, "--quiet", "--no-pvd")[0] == 0
+    afile = base / "a_file"
+    afile.write_text("not a folder\n")
+    return {"base": base, "model": model, "run": run, "file": afile}
+
+
+def _commands(w, out):
+    """Each subcommand with valid inputs and the output folder `out`."""
+    m = w["model"]
+    return {
+        "mesh": ["mesh", "--preset", "cylinder8", "--out", out],
+        "indent": ["indent", m, "--indentor", "C5", "--depth", "0.5", "--out", out],
+        "study-layers": ["study-layers", m, "--out", out],
+        "fit-material": ["fit-material", m, "--force", DATA / "synthetic_force_depth_plate.csv", "--out", out],
+        "line-load": ["line-load", m, "--depth", "0.5", "--out", out],
+        "contact-series": ["contact-series", m, "--force", "0.01", "--out", out],
+        "analyze": ["analyze", w["run"], "--neural", DATA / "synthetic_sa1_gratings.csv", "--out", out],
+    }
+
+
+@pytest.mark.parametrize("command", ["mesh", "indent", "study-layers", "fit-material", "line-load",
+                                     "contact-series", "analyze"])
+def test_out_is_an_existing_file(work, command):
+    line = assert_refused(_commands(work, work["file"])[command], [work["base"]], "existing file")
+    assert "--out" in line
+
+
+@pytest.mark.parametrize("command", ["mesh", "indent", "study-layers", "fit-material", "line-load",
+                                     "contact-series", "analyze"])
+def test_out_cannot_be_created(work, command):
+    if not Path("/proc").is_dir():
+        pytest.skip("needs /proc (a folder nobody can create entries in)")
+    assert_refused(_commands(work, "/proc/x")[command], [work["base"]], "cannot be created")
+
+
+def test_run_checks_every_stage_first(tmp_path):
+    out = tmp_path / "X"
+    assert_refused(["run", ROOT / "sample_images", "--out", out, "--size", "-1"], [tmp_path], "--size")
+    assert not out.exists()
+
+
+def test_run_checks_mesh_sizes_before_reconstructing(tmp_path):
+    out = tmp_path / "X"
+    assert_refused(["run", ROOT / "sample_images", "--out", out, "--size", "0.01"], [tmp_path], "size")
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("flags, pattern", [
+    (["--indentor", "C5", "--depth", "0.5", "--axis", "perpendicular"], "parallel"),
+    (["--indentor", "C5", "--depth", "0.5", "--axis", "30"], "parallel"),
+    (["--indentor", "C5", "--force", "0.02", "--max-depth", "-1"], "--max-depth"),
+    (["--indentor", "C5", "--force", "-0.01"], "--force"),
+    (["--indentor", "C5", "--force", "nan"], "--force"),
+    (["--indentor", "wedge:abc", "--depth", "1"], "wedge half-angle"),
+    (["--indentor", "two-point:x", "--depth", "1"], "two-point separation"),
+    (["--indentor", "two-point:-1", "--depth", "1"], "two-point separation"),
+    (["--indentor", "C5", "--depth", "-1"], "depth_mm"),
+    (["--indentor", "C5", "--depth", "0.5", "--axis", "sideways"], "orientation"),
+    (["--indentor", "C5", "--depth", "0.5", "--material", "mXYZ"], "material code"),
+    (["--indentor", "C5", "--depth", "0.5", "--nu", "0.7"], "Poisson"),
+    (["--indentor", "C5", "--depth", "0.5", "--receptor-depths", "a,b"], "value list"),
+    (["--indentor", "C5", "--depth", "0.5", "--sweep", "z=-1:1:0.5"], "sweep"),
+])
+def test_indent_refusals(work, flags, pattern):
+    """Each refused before the model is factorised (under 2 s; factorising alone takes longer)."""
+    assert_refused(["indent", work["model"], *flags, "--out", work["base"] / "o"], [work["base"]], pattern)
+
+
+def test_indent_scene_types_checked_before_the_model(work, tmp_path):
+    scene = tmp_path / "s.toml"
+    scene.write_text('[[experiment]]\nindentor = "C5"\nforce_N = -1\n')
+    assert_refused(["indent", work["model"], "--scene", scene], [work["base"]], "force_N")
+    scene.write_text('[[experiment]]\nindentor = "C5"\ndepth_mm = "0.5"\nstart = "zero"\n')
+    assert_refused(["indent", work["model"], "--scene", scene], [work["base"]], "unknown key")
+
+
+@pytest.mark.parametrize("argv, pattern", [
+    (["mesh", "--preset", "monkey", "--size", "-1"], "--size"),
+    (["mesh", "--preset", "monkey", "--coarse", "0"], "--coarse"),
+    (["mesh", "--preset", "monkey", "--epidermis", "nan"], "--epidermis"),
+    (["mesh", "--preset", "monkey", "--size", "0.01"], "size_mm"),
+    (["mesh", "--preset", "cylinder8", "--growth", "-2"], "--growth"),
+    (["mesh", "--preset", "monkey", "--layer3-scale", "3"], "layer3_scale"),
+    (["study-layers", "{model}", "--depth", "-1"], "depths"),
+    (["study-layers", "{model}", "--layers", "x"], "layers"),
+    (["study-layers", "{model}", "--indentor", "wedge:abc"], "wedge"),
+    (["fit-material", "{model}", "--force", "{data}/synthetic_force_depth_plate.csv", "--bounds", "7", "1"],
+     "--bounds"),
+    (["line-load", "{model}", "--step", "0"], "--step"),
+    (["line-load", "{model}", "--material", "m4"], "material code"),
+    (["contact-series", "{model}", "--force", "0"], "forces"),
+    (["contact-series", "{model}", "--depth", "1", "--cylinders", "C9"], "cylinder"),
+    (["contact-series", "{model}", "--force", "0.01", "--axis", "diagonal"], "orientation"),
+])
+def test_option_refusals(work, argv, pattern):
+    argv = [str(a).format(model=work["model"], data=DATA) for a in argv]
+    out = work["base"] / "o"
+    assert_refused([*argv, "--out", out], [work["base"]], pattern)
+
+
+def _fake_tetrahedralize(model, sizing, threads=0, progress=None):
+    """A deterministic stand-in for pytetwild: the tets of a coarse grid over the model's box."""
+    import pyvista as pv
+
+    v = model.vertices()
+    lo, hi = v.min(0), v.max(0)
+    grid = pv.ImageData(dimensions=(4, 4, 6), spacing=tuple((hi - lo) / (3, 3, 5)), origin=lo).to_tetrahedra()
+    return np.asarray(grid.points, float), grid.cells_dict[10].astype(np.int64)
+
+
+def test_corrupt_cache_entry_is_rebuilt(tmp_path, monkeypatch):
+    from fem import mesh
+    from fem.model import model_from_args, params_for
+
+    monkeypatch.setenv("FINGERTIP_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setattr(mesh, "tetrahedralize", _fake_tetrahedralize)
+    model = model_from_args(None, "monkey", params_for("monkey"))
+    sizing = mesh.Sizing(size_mm=1.5)
+    first, info = mesh.build_mesh(model, sizing)
+    entry = mesh.cache_dir() / f"{info['key']}.npz"
+    assert not info["cached"] and entry.is_file() and info["warnings"] == []
+    assert [p.name for p in entry.parent.iterdir()] == [entry.name]          # no temporary left
+    entry.write_bytes(entry.read_bytes()[:200])                             # truncated
+    with pytest.raises(mesh.CacheEntryError):
+        mesh.read_cache_entry(entry)
+    again, info = mesh.build_mesh(model, sizing)
+    assert not info["cached"] and len(info["warnings"]) == 1 and "discarded" in info["warnings"][0]
+    np.testing.assert_array_equal(again.points, first.points)
+    np.testing.assert_array_equal(again.tets, first.tets)
+    third, info = mesh.build_mesh(model, sizing)                            # the rebuilt entry is whole
+    assert info["cached"] and info["warnings"] == []
+    np.testing.assert_array_equal(third.tets, first.tets)
+
+
+def test_cache_entry_of_wrong_arrays_is_refused(tmp_path):
+    from fem import mesh
+
+    path = tmp_path / "e.npz"
+    np.savez(path, points=np.zeros((3, 3)), tets=np.array([[0, 1, 2, 7]]))
+    with pytest.raises(mesh.CacheEntryError):
+        mesh.read_cache_entry(path)
+
+
+def test_internal_error_is_one_line(monkeypatch, tmp_path):
+    """A bug (not bad input) ends with one line naming the variable that shows the traceback."""
+    import commands.mesh
+
+    def boom(*args, **kwargs):
+        raise RuntimeError("unexpected\nstate")
+
+    monkeypatch.setattr(commands.mesh, "run_mesh", boom)
+    monkeypatch.delenv(pipeline.DEBUG_ENV, raising=False)
+    code, _, err, _ = cli("mesh", "--preset", "cylinder8", "--out", tmp_path / "m")
+    assert code == 1 and err.count("\n") == 1 and err.startswith("error: internal error RuntimeError")
+    assert "Traceback" not in err and pipeline.DEBUG_ENV in err
+    monkeypatch.setenv(pipeline.DEBUG_ENV, "1")
+    code, _, err, _ = cli("mesh", "--preset", "cylinder8", "--out", tmp_path / "m")
+    assert code == 1 and "Traceback" in err and err.splitlines()[-1].startswith("error: internal error")
+
+
+def _interrupt(argv, env, sig, after_s):
+    proc = subprocess.Popen([sys.executable, str(ROOT / "pipeline.py"), *map(str, argv)], cwd=ROOT, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(after_s)
+    t0 = time.perf_counter()
+    proc.send_signal(sig)
+    out, err = proc.communicate(timeout=60)
+    return proc.returncode, err, time.perf_counter() - t0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_interrupt_while_meshing(tmp_path, sig, code):
+    """Ctrl-C or SIGTERM during pytetwild: one line, nothing in --out, no cache entry; a re-run
+    then meshes as a clean run does."""
+    env = {**os.environ, "FINGERTIP_CACHE_DIR": str(tmp_path / "cache")}
+    out = tmp_path / "m"
+    argv = ["mesh", "--preset", "monkey", "--size", "1.5", "--out", out, "--quiet"]
+    rc, err, seconds = _interrupt(argv, env, sig, 1.5)
+    assert rc == code, err
+    assert err.strip().splitlines() == ["error: interrupted; nothing was written"]
+    assert seconds < 5
+    assert not out.exists() and not list(tmp_path.glob(".m.partial-*"))
+    assert not list((tmp_path / "cache").rglob("*.npz"))
+    done = subprocess.run([sys.executable, str(ROOT / "pipeline.py"), *map(str, argv)], cwd=ROOT, env=env,
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert (out / "mesh.vtu").is_file() and len(list((tmp_path / "cache").rglob("*.npz"))) == 1

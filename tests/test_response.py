@@ -1,0 +1,208 @@
+"""Stored response models (fem.response): the same forces, deflections and receptor measures as
+the factorised path, keys that follow every input, corrupt files rebuilt, and `prepare` + `indent`."""
+import csv
+import json
+
+import numpy as np
+import pytest
+
+import pipeline
+from commands.indent import scene_of_flags
+from fem.experiments import run_experiments
+from fem.modelfolder import read_model
+from fem.response import ResponseStore, response_key
+
+RTOL = 1e-9
+"""Stored against factorised: both solve the same linear system, once by a Schur complement of a
+subset and solves, once by a stored matrix product; measured agreement is 1e-11 or better."""
+
+
+@pytest.fixture(scope="module")
+def cyl8(tmp_path_factory):
+    out = tmp_path_factory.mktemp("models") / "cyl8"
+    assert pipeline.main(["mesh", "--preset", "cylinder8", "--bone", "--out", str(out), "--quiet"]) == 0
+    return out
+
+
+@pytest.fixture(scope="module")
+def monkey(tmp_path_factory):
+    out = tmp_path_factory.mktemp("models") / "monkey"
+    assert pipeline.main(["mesh", "--preset", "monkey", "--size", "1.5", "--out", str(out), "--quiet"]) == 0
+    return out
+
+
+def _rel(a, b):
+    return np.abs(np.asarray(a) - np.asarray(b)).max() / max(np.abs(np.asarray(a)).max(), 1e-300)
+
+
+def _both(folder, scene):
+    """(factorised SceneRun, first stored SceneRun (built), repeat stored SceneRun)."""
+    runs = []
+    for store in (None, ResponseStore(folder), ResponseStore(folder)):
+        model, info = read_model(folder, scene.material, scene.nu)
+        runs.append(run_experiments(model, info, scene, store=store))
+    return runs
+
+
+def _assert_same(ref, run):
+    for (_, a), (_, b) in zip(ref.experiments[0].steps, run.experiments[0].steps, strict=True):
+        assert a.total_force_N > 0
+        assert _rel(a.force_N, b.force_N) < RTOL
+        assert _rel(a.deflection_mm, b.deflection_mm) < RTOL
+        assert _rel(a.observed, b.observed) < RTOL
+        ma, mb = ref.sampler.measures(a.observed, ref.measures), run.sampler.measures(b.observed, run.measures)
+        for name in ref.measures:
+            assert _rel(ma[name], mb[name]) < RTOL, name
+
+
+@pytest.mark.parametrize("which, indentor, depth, orientation", [
+    ("cyl8", "C5", "0.25:1:0.25", "parallel"),
+    ("monkey", "C5", "0.5:1.5:0.5", "perpendicular")])
+def test_stored_equals_factorised(which, indentor, depth, orientation, request):
+    folder = request.getfixturevalue(which)
+    scene = scene_of_flags(indentor, orientation=orientation, depth=depth)
+    ref, first, repeat = _both(folder, scene)
+    assert ref.responses == [] and first.responses[0][1] == "built" and repeat.responses[0][1] == "stored"
+    assert first.responses[0][0] == repeat.responses[0][0]
+    assert repeat.sampler.operator is None            # nothing but the stored matrices answered
+    _assert_same(ref, first)
+    _assert_same(ref, repeat)
+    for (_, a), (_, b) in zip(first.experiments[0].steps, repeat.experiments[0].steps):
+        assert np.array_equal(a.force_N, b.force_N) and np.array_equal(a.observed, b.observed)
+
+
+def test_key_follows_inputs(cyl8):
+    from fem.modelfolder import CONTACT_REGION, receptor_surface
+    from fem.receptors import receptor_grid
+
+    def key(material=None, nu=None, approach=(0, -1, 0), depths=(0.5, 0.75, 1.0), spacing=1.0):
+        model, _ = read_model(cyl8, material, nu)
+        sn = model.surface_nodes(CONTACT_REGION[2])
+        grid = receptor_grid(*receptor_surface(model, sn), depths, spacing)
+        return response_key(model, np.asarray(approach, float), grid, "mesh")
+
+    base = key()
+    assert key() == base
+    assert key(approach=(0, -2, 0)) == base                  # the same direction
+    others = [key(material="m43338"), key(nu=0.45), key(approach=(0.1, -1, 0)), key(depths=(0.5, 1.0)),
+              key(spacing=0.5)]
+    assert len({base, *others}) == 6
+    model, _ = read_model(cyl8)
+    sn = model.surface_nodes(CONTACT_REGION[2])
+    grid = receptor_grid(*receptor_surface(model, sn))
+    assert response_key(model, np.array([0, -1.0, 0]), grid, "other mesh") != base.replace("x", "")
+
+
+@pytest.mark.parametrize("damage", ["truncate", "json"])
+def test_corrupt_store_is_rebuilt(cyl8, damage):
+    scene = scene_of_flags("C5", depth="0.5")
+    model, info = read_model(cyl8)
+    first = run_experiments(model, info, scene, store=ResponseStore(cyl8))
+    key = first.responses[0][0]
+    obs = first.experiments[0].steps[0][1].observed.copy()
+    del first                                   # its memory maps: a file truncated in place is not readable
+    folder = ResponseStore(cyl8).path(key)
+    if damage == "truncate":
+        data = (folder / "R.npy").read_bytes()
+        (folder / "R.npy").unlink()
+        (folder / "R.npy").write_bytes(data[:len(data) // 2])
+    else:
+        (folder / "response.json").write_text("{not json")
+    with pytest.warns(UserWarning, match="unreadable"):
+        again = run_experiments(model, info, scene, store=ResponseStore(cyl8))
+    assert again.responses[0][:2] == (key, "built")
+    assert ResponseStore(cyl8).load(key) is not None
+    assert _rel(obs, again.experiments[0].steps[0][1].observed) < RTOL
+
+
+def test_indent_without_prepare_factorises_and_stores_nothing(tmp_path, capsys):
+    """Stored models are opt-in (`prepare`): building one costs a solve per condensed candidate."""
+    folder = tmp_path / "cyl8"
+    assert pipeline.main(["mesh", "--preset", "cylinder8", "--bone", "--out", str(folder), "--quiet"]) == 0
+    assert pipeline.main(["indent", str(folder), "--indentor", "C5", "--depth", "0.5", "--no-pvd",
+                          "--out", str(tmp_path / "run")]) == 0
+    captured = capsys.readouterr()
+    assert "response model" not in captured.out + captured.err
+    assert not (folder / "response").exists()
+
+
+def test_prepare_then_indent(cyl8, tmp_path, capsys):
+    assert pipeline.main(["prepare", str(cyl8), "--material", "m43338", "--receptor-spacing", "0.5",
+                          "--quiet"]) == 0
+    assert pipeline.main(["prepare", str(cyl8), "--material", "m43338", "--receptor-spacing", "0.5"]) == 0
+    captured = capsys.readouterr()
+    assert "response model stored" in captured.out and "201 contact candidates" in captured.out
+    assert "factorising" not in captured.err
+    key = next(p.name for p in (cyl8 / "response").iterdir() if p.name in captured.out)
+    out = tmp_path / "run"
+    assert pipeline.main(["indent", str(cyl8), "--indentor", "C5", "--depth", "0.5,1", "--material", "m43338",
+                          "--receptor-spacing", "0.5", "--no-pvd", "--out", str(out)]) == 0
+    captured = capsys.readouterr()
+    assert f"response model: stored {key}" in captured.out
+    assert "factorising" not in captured.err and f"response model: stored {key[:12]}" in captured.err
+    # the factorised path writes the same numbers (to the CSVs' 9 significant digits, round-off aside)
+    ref = tmp_path / "ref"
+    assert pipeline.main(["indent", str(cyl8), "--indentor", "C5", "--depth", "0.5,1", "--material", "m43338",
+                          "--receptor-spacing", "0.5", "--pvd", "--out", str(ref), "--quiet"]) == 0
+    assert (ref / "C5.pvd").is_file() and not (out / "C5.pvd").exists()
+    for name in ("C5.csv", "C5_surface.csv", "C5_receptors.csv"):
+        with open(out / name) as a, open(ref / name) as b:
+            ra, rb = list(csv.reader(a)), list(csv.reader(b))
+        assert ra[0] == rb[0] and len(ra) == len(rb)
+        skip = {ra[0].index(c) for c in ("penetration_mm", "tensile_N", "complementarity_Nmm") if c in ra[0]}
+        for x, y in zip(ra[1:], rb[1:]):
+            for j, (u, v) in enumerate(zip(x, y)):
+                if j not in skip and u != v:
+                    assert float(u) == pytest.approx(float(v), rel=1e-7, abs=1e-15), (name, ra[0][j])
+    assert json.loads((out / "run.json").read_text()) == json.loads((ref / "run.json").read_text())
+
+
+def test_prepare_bad_approach(cyl8, capsys):
+    assert pipeline.main(["prepare", str(cyl8), "--approach", "0,0,1"]) == 2
+    assert "x-y plane" in capsys.readouterr().err
+
+
+def test_mesh_hash_is_remembered_until_the_mesh_changes(cyl8, tmp_path, monkeypatch):
+    """response/mesh.json spares a repeat run the second read of mesh.vtu; a new mesh file (new
+    inode, size or time) is hashed again."""
+    import shutil
+
+    from fem import response
+
+    folder = tmp_path / "copy"
+    shutil.copytree(cyl8, folder, ignore=shutil.ignore_patterns("response", "indent_*"))
+    store = ResponseStore(folder)
+    (folder / "response").mkdir()
+    sha = store.mesh_sha256()
+    assert sha == response.mesh_sha256(folder)
+    assert json.loads((folder / "response" / "mesh.json").read_text())["sha256"] == sha
+
+    def no_read(_):
+        raise AssertionError("mesh.vtu read again")
+
+    monkeypatch.setattr(response, "mesh_sha256", no_read)
+    assert ResponseStore(folder).mesh_sha256() == sha
+    monkeypatch.undo()
+    data = (folder / "mesh.vtu").read_bytes()
+    (folder / "mesh.vtu").unlink()
+    (folder / "mesh.vtu").write_bytes(data.replace(b"<VTKFile", b"<VTKFile ", 1))   # other bytes
+    other = ResponseStore(folder).mesh_sha256()
+    assert other != sha and other == response.mesh_sha256(folder)
+
+
+def test_repeat_run_without_plots_imports_no_matplotlib(cyl8, tmp_path):
+    """A stored model answers a --no-plots --no-pvd run: no PNG written, and neither matplotlib,
+    fem.plots nor the factorisation's PARDISO loaded."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    assert pipeline.main(["prepare", str(cyl8), "--quiet"]) == 0
+    out = tmp_path / "run"
+    code = ("import sys, pipeline; assert pipeline.main(sys.argv[1:]) == 0; "
+            "print(sorted(m for m in ('matplotlib', 'fem.plots', 'pypardiso') if m in sys.modules))")
+    done = subprocess.run([sys.executable, "-c", code, "indent", str(cyl8), "--indentor", "C5", "--depth",
+                           "0.25:1:0.25", "--no-pvd", "--no-plots", "--out", str(out), "--quiet"],
+                          capture_output=True, text=True, cwd=Path(pipeline.__file__).parent, check=True)
+    assert done.stdout.strip().splitlines()[-1] == "[]", done.stdout + done.stderr
+    assert not list(out.glob("*.png")) and (out / "C5_receptors.csv").is_file()
