@@ -129,26 +129,16 @@ class FactorCompliance(Compliance):
         return np.asarray(self.solve((self.B @ force_N)[:, None])).reshape(-1)
 
 
-class CondensedCompliance(FactorCompliance):
-    """The whole compliance at once from a system factorised with `condense=(nodes, approach)` on
-    the candidates (`LinearSystem.compliance`: the inverse of their Schur complement, no solves);
-    observations take one solve per indentation (in blocks, `ContactModel.observe_pending`)
-    instead of cached columns. Arguments as FactorCompliance, plus the LinearSystem and the
-    candidates' P2 node ids (m,).
+class DenseReach:
+    """Columns and blocks of a dense compliance C (k, k) over the candidates in `reach` (m,) bool;
+    the other candidates' rows are NaN (they cannot carry force). Mixed into a Compliance."""
 
-    When only some candidates were condensed (`reach`, e.g. those a scene's indentors can touch),
-    compliance rows of the others are NaN: they cannot carry force, and their deflection comes
-    with the observation solve. Raises ValueError when none was condensed along the direction."""
-
-    def __init__(self, system, nodes, dofs, direction, observe=None, chunk: int = 64):
-        super().__init__(system.solve, system.model.ndof, dofs, direction, observe, chunk)
-        self.reach = system.stored(nodes, direction)                # the same for -direction
-        if not self.reach.any():
-            raise ValueError("no candidate has a stored compliance along this direction")
-        self._C = system.compliance(np.asarray(nodes)[self.reach], direction)
-        self._row = np.cumsum(self.reach) - 1                       # candidate -> row of _C
+    def _dense(self, C, reach) -> None:
+        self.reach = np.asarray(reach, bool)
+        self._C = C
+        self._row = np.cumsum(self.reach) - 1                       # candidate -> row of C
         self.held = np.zeros(self.m, bool)
-        self.held[self.reach] = np.diag(self._C) == 0
+        self.held[self.reach] = np.diag(C) == 0
 
     def columns(self, idx) -> np.ndarray:
         idx = np.asarray(idx, int)
@@ -162,6 +152,25 @@ class CondensedCompliance(FactorCompliance):
         """As Compliance.block; C is symmetric, so whole rows are gathered (contiguous memory,
         several times faster than np.ix_ on a large block) and transposed (a view)."""
         return self._C[self._row[np.asarray(cols, int)]][:, self._row[np.asarray(rows, int)]].T
+
+
+class CondensedCompliance(DenseReach, FactorCompliance):
+    """The whole compliance at once from a system factorised with `condense=(nodes, approach)` on
+    the candidates (`LinearSystem.compliance`: the inverse of their Schur complement, no solves);
+    observations take one solve per indentation (in blocks, `ContactModel.observe_pending`)
+    instead of cached columns. Arguments as FactorCompliance, plus the LinearSystem and the
+    candidates' P2 node ids (m,).
+
+    When only some candidates were condensed (`reach`, e.g. those a scene's indentors can touch),
+    compliance rows of the others are NaN: they cannot carry force, and their deflection comes
+    with the observation solve. Raises ValueError when none was condensed along the direction."""
+
+    def __init__(self, system, nodes, dofs, direction, observe=None, chunk: int = 64):
+        super().__init__(system.solve, system.model.ndof, dofs, direction, observe, chunk)
+        reach = system.stored(nodes, direction)                     # the same for -direction
+        if not reach.any():
+            raise ValueError("no candidate has a stored compliance along this direction")
+        self._dense(system.compliance(np.asarray(nodes)[reach], direction), reach)
 
     def observed(self, idx) -> np.ndarray:
         raise NotImplementedError("a condensed compliance observes whole force vectors: use observe()")

@@ -43,7 +43,7 @@ import scipy.sparse as sp
 
 from common.progress import as_progress
 from common.staging import staged_output, write_json
-from fem.compliance import Compliance
+from fem.compliance import Compliance, DenseReach
 from fem.contact import ContactModel, fe_facets
 from fem.modelfolder import CONDENSE_MAX_NODES, CONTACT_REGION, HELD, held_regions
 
@@ -259,30 +259,15 @@ class ResponseStore:
 
 
 # --------------------------------------------------------------------------- contact
-class StoredCompliance(Compliance):
+class StoredCompliance(DenseReach, Compliance):
     """The compliance and observed response of a `ResponseModel`: the same interface as
     `fem.compliance.CondensedCompliance` (NaN compliance rows outside `reach`, deflections of
     those candidates with the observation), answered by matrix products, no solves."""
 
     def __init__(self, rm: ResponseModel):
         super().__init__(*[len(rm.W), len(rm.R)])
-        self.reach = np.asarray(rm.reach, bool)
         self._W, self._R = rm.W, rm.R
-        self._C = rm.C
-        self._row = np.cumsum(self.reach) - 1
-        self.held = np.zeros(self.m, bool)
-        self.held[self.reach] = np.diag(self._C) == 0
-
-    def columns(self, idx) -> np.ndarray:
-        idx = np.asarray(idx, int)
-        if self.reach.all():
-            return self._C[:, idx]
-        out = np.full((self.m, len(idx)), np.nan)
-        out[self.reach] = self._C[:, self._row[idx]]
-        return out
-
-    def block(self, rows, cols) -> np.ndarray:
-        return self._C[self._row[np.asarray(cols, int)]][:, self._row[np.asarray(rows, int)]].T
+        self._dense(rm.C, rm.reach)
 
     def observed(self, idx) -> np.ndarray:
         return np.asarray(self._R[:, self._row[np.asarray(idx, int)]])
