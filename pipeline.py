@@ -49,6 +49,13 @@ def _number(low: float | None = None, strict: bool = True, high: float | None = 
 FINITE, POSITIVE, NONNEGATIVE = _number(), _number(0.0), _number(0.0, strict=False)
 
 
+def _scheduler_option(p, task: str):
+    p.add_argument("--scheduler", default="none",
+                   help=f"none (default: this process), local:N (N worker processes on this machine) or "
+                        f"tcp://HOST:PORT (a running Dask cluster), one task per {task}; Dask needs "
+                        f"pip install -e \".[dask]\"")
+
+
 # --------------------------------------------------------------------------- reconstruct
 def _add_reconstruct(sub):
     p = sub.add_parser("reconstruct", help="turntable images -> sections.json, surface.stl, report.png")
@@ -245,6 +252,7 @@ def _add_indent(sub):
     p.add_argument("--plots", action=argparse.BooleanOptionalAction, default=None,
                    help="PNG figures per experiment (default: the scene's, on)")
     p.add_argument("--out", help="output folder (default: <model>/indent_<indentor>)")
+    _scheduler_option(p, "experiment of the scene")
     p.add_argument("--quiet", action="store_true", help="no progress and no summary")
     p.set_defaults(run=_run_indent, check=_check_indent)
 
@@ -268,7 +276,7 @@ def _check_indent(args):
 def _run_indent(args):
     from commands.indent import run_indent
 
-    text = run_indent(**_indent_options(args), progress=not args.quiet)
+    text = run_indent(**_indent_options(args), progress=not args.quiet, scheduler=args.scheduler)
     if not args.quiet:
         print(text)
 
@@ -323,6 +331,7 @@ def _add_study_layers(sub):
     p.add_argument("--deflection", help="measured profiles to plot alongside: CSV distance_mm, deflection_mm, "
                                         "depth_mm")
     p.add_argument("--out", help="output folder (default: <model>/study_layers)")
+    _scheduler_option(p, "trial material")
     p.set_defaults(run=_run_study_layers)
 
 
@@ -332,7 +341,8 @@ def _run_study_layers(args):
     text = run_study_layers(args.model, args.out or str(Path(args.model) / "study_layers"), base=args.base,
                             layers=args.layers, offsets=args.offsets, depths=args.depth, indentor=args.indentor,
                             orientation=args.orientation, position_mm=args.position, nu=args.nu,
-                            side=args.side, data_csv=args.deflection, progress=not args.quiet)
+                            side=args.side, data_csv=args.deflection, progress=not args.quiet,
+                            scheduler=args.scheduler)
     if not args.quiet:
         print(text)
 
@@ -355,6 +365,7 @@ def _add_fit_material(sub):
                    help="bounds on log10 modulus in Pa (default 1 7)")
     p.add_argument("--noise", type=POSITIVE, help="measurement noise in mm (default: from the residuals)")
     p.add_argument("--out", help="output folder (default: <model>/fit_material)")
+    _scheduler_option(p, "trial material")
     p.set_defaults(run=_run_fit_material)
 
 
@@ -366,7 +377,7 @@ def _run_fit_material(args):
                             base=args.base, free_layers=args.free_layers, bounds=tuple(args.bounds),
                             indentor=args.indentor, orientation=args.orientation, position_mm=args.position,
                             force_indentor=args.force_indentor, match=args.match, nu=args.nu, side=args.side,
-                            noise_mm=args.noise, progress=not args.quiet)
+                            noise_mm=args.noise, progress=not args.quiet, scheduler=args.scheduler)
     if not args.quiet:
         print(text)
 
@@ -507,9 +518,7 @@ def _add_batch(sub):
     p.add_argument("--growth", type=POSITIVE, help="mesh: edge length growth per mm (default 0.5)")
     p.add_argument("--fine-depth", type=POSITIVE, help="mesh: depth of the fine zone in mm (default 1.5 3D, 1.0 2D)")
     p.add_argument("--tip", default="flat", help="3D distal end: flat (default), rounded or a dome length in mm")
-    p.add_argument("--scheduler", default="none",
-                   help="none (default: this process), local:N (N worker processes on this machine) or "
-                        "tcp://HOST:PORT (a running Dask cluster); Dask needs pip install -e \".[dask]\"")
+    _scheduler_option(p, "subject")
     p.add_argument("--force", action="store_true", help="recompute reconstruct and 3D mesh stages")
     p.add_argument("--quiet", action="store_true", help="no progress and no summary")
     p.set_defaults(run=_run_batch, check=_check_batch)

@@ -88,8 +88,9 @@ def main():
           f"`reconstruct()` (best of 2) on {os.cpu_count()} cores, without writing outputs; CPU = process "
           "time summed over both threads (what the run costs when the machine is shared). Camera: "
           "parallel projection, or a pinhole camera that far from the rotation axis, with "
-          "`camera_distance_mm` in the manifest or without it (no key: the stage warns with the error "
-          "it estimates, column *warned*). z0 px: where z = 0 lies against the true proximal cut.", "",
+          "`camera_distance_mm` in the manifest or without it (no key: the stage warns when it estimates "
+          "an error above 0.5 px, column *warned*: sections and z = 0). z0 px: where z = 0 lies against "
+          "the true proximal cut.", "",
           "| views | image | camera | mean px | max px | mean um | max um | volume % | z0 px | sections | "
           "wall s | CPU s | warned |",
           "|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"]

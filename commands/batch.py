@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from commands.tasks import TASK_THREADS
 from common.distribute import TaskFailed, TaskRunner, parse_scheduler, require_dask
 from common.errors import InputError
 from common.staging import check_output_dir, staged_output
@@ -29,8 +30,6 @@ from common.tables import write_csv
 
 SUMMARY_COLUMNS = ("subject", "experiment", "step", "depth_mm", "force_N", "max_pressure_MPa", "contact_area_mm2")
 """Leading columns of summary.csv; then peak_<measure> per receptor measure, then error."""
-TASK_THREADS = 1
-"""BLAS threads of a subject task: a cohort runs in parallel over subjects (`--scheduler local:N`)."""
 
 
 @dataclass(frozen=True)

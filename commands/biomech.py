@@ -6,10 +6,12 @@ CSV tables format floats with `.9g`.
 """
 from __future__ import annotations
 
+import contextlib
 import time
 
 import numpy as np
 
+from common.distribute import TaskRunner, parse_scheduler, require_dask
 from common.errors import InputError
 from common.staging import check_output_dir, staged_output, write_json
 from common.tables import write_csv
@@ -54,9 +56,31 @@ def _check_start(out_dir, *indentors, orientation=None) -> None:
         orientation_deg(orientation)
 
 
-def _experiment(model_dir, indentor, orientation, position_mm, nu, side, progress=False):
+def _experiment(model_dir, indentor, orientation, position_mm, nu, side, progress=False, map=None):
     return DeflectionExperiment(model_dir, indentor=indentor, orientation=orientation,
-                                position_mm=position_mm, nu=nu, side=side, progress=progress)
+                                position_mm=position_mm, nu=nu, side=side, progress=progress, map=map)
+
+
+def _check_scheduler(scheduler):
+    """The --scheduler value as a common.distribute.Scheduler; InputError for a bad one or when
+    it needs Dask and Dask is missing."""
+    sched = parse_scheduler(scheduler)
+    require_dask(sched)
+    return sched
+
+
+@contextlib.contextmanager
+def _material_tasks(sched):
+    """The map hook of DeflectionExperiment for a scheduler: None for "none" (this process, as
+    ever); else one task per trial material on Dask workers, and this process on
+    commands.tasks.TASK_THREADS threads too, so that its own solves add up as the workers' do."""
+    from commands.tasks import task_map, task_threads
+
+    if sched.kind == "none":
+        yield None
+        return
+    with TaskRunner(sched) as runner, task_threads():
+        yield task_map(runner, "trial material")
 
 
 def _columns(names, rows) -> dict[str, list]:
@@ -70,19 +94,23 @@ def _force_unit(dim: int) -> str:
 
 def run_study_layers(model_dir, out_dir, base=None, layers="1,2,3,4", offsets="-1,0,1", depths="2.0",
                      indentor="wedge", orientation=None, position_mm=None, nu=None, side="mean",
-                     data_csv=None, progress=False) -> str:
+                     data_csv=None, progress=False, scheduler=None) -> str:
     """`pipeline.py study-layers`: layer_study.csv / .json / .png and profile.png in out_dir.
-    progress (here and in the other back ends): True for progress on stderr, or a progress object."""
+    progress (here and in the other back ends): True for progress on stderr, or a progress object.
+    scheduler (here and in run_fit_material): none (default), local:N or tcp://HOST:PORT: the
+    trial materials as tasks on Dask workers (common.distribute), the same numbers as none."""
     t0 = time.perf_counter()
     _check_start(out_dir, indentor, orientation=orientation)
+    sched = _check_scheduler(scheduler)
     depth_list = _parse_floats(depths, "depths")
     layer_list, offset_list = _parse_ints(layers, "layers"), _parse_ints(offsets, "offsets")
     data = read_deflection_csv(data_csv) if data_csv else []
-    exp = _experiment(model_dir, indentor, orientation, position_mm, nu, side, progress)
-    base = base or exp.info.get("material", "m43338")
-    study = layer_study(exp, base, layer_list, offset_list, depth_list)
-    base_prof = exp.profiles(base, depth_list)
-    fits = [idealised_fits(p) for p in base_prof]
+    with _material_tasks(sched) as map_:
+        exp = _experiment(model_dir, indentor, orientation, position_mm, nu, side, progress, map_)
+        base = base or exp.info.get("material", "m43338")
+        study = layer_study(exp, base, layer_list, offset_list, depth_list)
+        base_prof = exp.profiles(base, depth_list)
+        fits = [idealised_fits(p) for p in base_prof]
     with staged_output(out_dir) as tmp:
         rows = [(code, p.depth_mm, float(d), float(w)) for code, profs in study.profiles.items()
                 for p in profs for d, w in zip(p.distance_mm, p.deflection_mm)]
@@ -116,34 +144,37 @@ def run_study_layers(model_dir, out_dir, base=None, layers="1,2,3,4", offsets="-
 def run_fit_material(model_dir, out_dir, deflection_csv=None, force_csv=None, keep_ratios=False, base=None,
                      free_layers="2,3,4", bounds=(1.0, 7.0), indentor="wedge", orientation=None,
                      position_mm=None, force_indentor="plate", match="least-squares", nu=None,
-                     side="mean", noise_mm=None, progress=False) -> str:
+                     side="mean", noise_mm=None, progress=False, scheduler=None) -> str:
     """`pipeline.py fit-material`: fit.json, fit_profiles.csv, fit_profiles.png, force_fit.png."""
     if deflection_csv is None and force_csv is None:
         raise InputError("fit-material needs --deflection CSV and/or --force CSV")
     t0 = time.perf_counter()
     _check_start(out_dir, indentor, force_indentor, orientation=orientation)
+    sched = _check_scheduler(scheduler)
     free = _parse_ints(free_layers, "free layers")
     if not bounds[0] < bounds[1]:
         raise InputError(f"--bounds {bounds[0]:g} {bounds[1]:g}: give LO < HI (log10 modulus in Pa), e.g. 1 7")
     data = read_deflection_csv(deflection_csv) if deflection_csv else None
     forces = read_force_csv(force_csv) if force_csv else None
-    exp = _experiment(model_dir, indentor, orientation, position_mm, nu, side, progress)
-    base = base or exp.info.get("material", "m43338")
-    base_v = parse_code(base, exp.n_layers)
-    report, fit, scale = {"model": str(model_dir), "base": base}, None, None
-    if data is not None:
-        fit = fit_material(exp, data, base, free, bounds, noise_mm=noise_mm)
-        report["deflection_fit"] = {**fit.report(), "indentor": exp.indentor.name,
-                                    "depths_mm": [p.depth_mm for p in data], "side": side}
-        report["deflection_fit"]["base_rms_mm"] = float(np.sqrt(np.mean(profile_residuals(exp, base_v, data) ** 2)))
-    if forces is not None:
-        ratios = base_v if keep_ratios or fit is None else fit.log10_Pa
-        fexp = exp if force_indentor == indentor else _experiment(model_dir, force_indentor, orientation,
-                                                                  position_mm, nu, side, progress)
-        scale = fit_force_scale(fexp.forces_N(ratios, forces[0]), forces[1], ratios, forces[0], match)
-        report["force_fit"] = {**scale.report(), "indentor": fexp.indentor.name, "ratios_from":
-                               "base material" if ratios is base_v else "deflection fit",
-                               "force_unit": _force_unit(exp.dim)}
+    with _material_tasks(sched) as map_:
+        exp = _experiment(model_dir, indentor, orientation, position_mm, nu, side, progress, map_)
+        base = base or exp.info.get("material", "m43338")
+        base_v = parse_code(base, exp.n_layers)
+        report, fit, scale = {"model": str(model_dir), "base": base}, None, None
+        if data is not None:
+            fit = fit_material(exp, data, base, free, bounds, noise_mm=noise_mm)
+            report["deflection_fit"] = {**fit.report(), "indentor": exp.indentor.name,
+                                        "depths_mm": [p.depth_mm for p in data], "side": side}
+            base_r = profile_residuals(exp, base_v, data)
+            report["deflection_fit"]["base_rms_mm"] = float(np.sqrt(np.mean(base_r ** 2)))
+        if forces is not None:
+            ratios = base_v if keep_ratios or fit is None else fit.log10_Pa
+            fexp = exp if force_indentor == indentor else _experiment(model_dir, force_indentor, orientation,
+                                                                      position_mm, nu, side, progress, map_)
+            scale = fit_force_scale(fexp.forces_N(ratios, forces[0]), forces[1], ratios, forces[0], match)
+            report["force_fit"] = {**scale.report(), "indentor": fexp.indentor.name, "ratios_from":
+                                   "base material" if ratios is base_v else "deflection fit",
+                                   "force_unit": _force_unit(exp.dim)}
     report["seconds"] = round(time.perf_counter() - t0, 2)
     with staged_output(out_dir) as tmp:
         write_json(tmp / "fit.json", report)

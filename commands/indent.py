@@ -10,6 +10,7 @@ import sys
 import time
 from pathlib import Path
 
+from common.distribute import TaskRunner, parse_scheduler, require_dask
 from common.errors import InputError
 from common.progress import as_progress
 from common.staging import check_output_dir, staged_output
@@ -55,17 +56,24 @@ def scene_of_flags(indentor, orientation="parallel", position=None, incline=None
     return Scene.from_dict({"experiment": [exp], "receptors": receptors})
 
 
-def indent_folder(model_dir, out_dir, scene: Scene, progress: bool = True) -> str:
+def indent_folder(model_dir, out_dir, scene: Scene, progress: bool = True, scheduler=None) -> str:
     """Run every experiment of a scene on a model folder and write the run folder atomically into
     out_dir (CSV, run.json, and PNG and PVD as the scene says). Placement warnings go to stderr;
     progress: True (a `common.progress.Progress` on stderr), False, or a progress object. Returns
-    the summary text (2D forces in N/mm)."""
+    the summary text (2D forces in N/mm). scheduler: none (default), local:N or tcp://HOST:PORT:
+    a scene of several experiments runs one task per experiment on Dask workers, each
+    factorising the model itself (`distributed_run`); the files are those of none."""
     t_start = time.perf_counter()
     check_output_dir(out_dir)
+    sched = parse_scheduler(scheduler)
+    require_dask(sched)
     scene.check_dim(folder_dim(folder_info(model_dir)))
     model, info = read_model(model_dir, scene.material, scene.nu)
     store = response_store(model_dir, scene, progress)
-    run = run_experiments(model, info, scene, progress=as_progress(progress), store=store)
+    if sched.kind != "none" and _distributable(scene, store, progress):
+        run = distributed_run(model_dir, model, info, scene, sched, progress)
+    else:
+        run = run_experiments(model, info, scene, progress=as_progress(progress), store=store)
     for warning in run.warnings:
         print(f"warning: {warning}", file=sys.stderr)
     with staged_output(out_dir) as tmp:
@@ -83,6 +91,48 @@ def indent_folder(model_dir, out_dir, scene: Scene, progress: bool = True) -> st
     lines += [f"  response model: {how} {key} ({size / 2**20:.1f} MB, built in {built:.2f} s)"
               for key, how, built, size in run.responses]
     return "\n".join(lines)
+
+
+def _distributable(scene: Scene, store, progress) -> bool:
+    """Whether a scene's experiments can run as tasks: several of them, no stored response
+    models (they answer without factorising) and no PVD (full fields need the factorisation in
+    this process); says why not in one line on stderr (if progress)."""
+    from fem.runfolder import writes_pvd
+
+    why = ("it has one experiment" if len(scene.experiments) < 2 else
+           "the stored response models answer it without factorising" if store is not None else
+           "its PVD output needs the full fields in this process (--no-pvd distributes it)"
+           if any(writes_pvd(scene.output, len(e.offsets_mm) * len(e.loads)) for e in scene.experiments) else None)
+    if why and progress:
+        print(f"scheduler: running the scene in this process: {why}", file=sys.stderr, flush=True)
+    return why is None
+
+
+def experiment_task(item: tuple):
+    """One task of `distributed_run`: item (model folder, Scene, experiment index) ->
+    fem.experiments.ExperimentRun with its observed indentations (the model is read here)."""
+    from fem.experiments import run_experiment
+
+    model_dir, scene, index = item
+    model, info = read_model(model_dir, scene.material, scene.nu)
+    return run_experiment(model, info, scene, index)
+
+
+def distributed_run(model_dir, model, info, scene: Scene, sched, progress=True):
+    """fem.experiments.SceneRun of a scene with one task per experiment on Dask workers
+    (`common.distribute`); each task factorises the model for the candidates the whole scene
+    can reach, on commands.tasks.TASK_THREADS threads, and this process only builds the
+    receptor sampler and collects the runs in the scene's order."""
+    from commands.tasks import task_map, task_threads
+    from fem.experiments import assemble_run
+
+    with TaskRunner(sched) as runner, task_threads():
+        if progress:
+            print(f"scheduler {sched}: {len(scene.experiments)} experiments on {runner.workers} worker(s)",
+                  file=sys.stderr, flush=True)
+        runs = task_map(runner, "experiment")(experiment_task, [(str(model_dir), scene, k)
+                                                                for k in range(len(scene.experiments))])
+        return assemble_run(model, info, scene, runs, as_progress(progress))
 
 
 def response_store(model_dir, scene: Scene, progress=True):
@@ -128,14 +178,14 @@ def experiment_line(e, dim: int) -> str:
 def run_indent(model, scene=None, indentor=None, orientation="parallel", position=None, incline=None,
                depth=None, force=None, equal_force=False, max_depth=5.0, sweep=None, material=None, nu=None,
                receptor_depths="0.5,0.75,1.0", receptor_spacing=1.0, line=None, pvd=None, out=None,
-               progress: bool = True, plots=None) -> str:
+               progress: bool = True, plots=None, scheduler=None) -> str:
     """`pipeline.py indent` from its option values: the --scene file, or the experiment of the
     flags; --material, --nu, --pvd and --plots override the scene's. Output folder default:
     <model>/indent_<scene file stem or experiment name>."""
     spec, out = indent_scene(model, scene, indentor, orientation, position, incline, depth, force, equal_force,
                              max_depth, sweep, material, nu, receptor_depths, receptor_spacing, line, pvd, out,
                              plots)
-    return indent_folder(model, out, spec, progress=progress)
+    return indent_folder(model, out, spec, progress=progress, scheduler=scheduler)
 
 
 def indent_scene(model, scene=None, indentor=None, orientation="parallel", position=None, incline=None,

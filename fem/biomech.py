@@ -22,6 +22,7 @@ one material the contact compliance columns are reused across depths (fem.contac
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -135,14 +136,22 @@ class DeflectionExperiment:
     cached, only a new depth for them re-factorises) - a 3D factor can take gigabytes.
     progress: optional `common.progress` object (None: silent) shown the factorisations and the
     loops over materials (`layer_study`) and cylinders (`cylinder_series`).
+    map: optional `map(fn, items) -> list` (results in the order of items, e.g. on worker
+    processes) that `evaluate` hands batches of new materials to, one item per material; the
+    workers rebuild this experiment from the model folder once each (`solve_material`). None:
+    every material is solved here, when first asked for.
     """
 
     def __init__(self, model_dir, indentor: str = "wedge", orientation=None, position_mm=None,
-                 nu=None, band_mm: float = 0.25, side: str = "mean", max_factors: int = 4, progress=None):
+                 nu=None, band_mm: float = 0.25, side: str = "mean", max_factors: int = 4, progress=None,
+                 map=None):
         from common.progress import as_progress
         from fem.modelfolder import CONTACT_REGION, read_model
 
         self.progress = as_progress(progress)
+        self.map = map
+        self.args = (str(model_dir), indentor, orientation, None if position_mm is None else tuple(position_mm),
+                     nu, band_mm, side)     # what rebuilds this experiment on a worker (`solve_material`)
         self.model_dir, self.nu, self.band_mm, self.side = model_dir, nu, band_mm, side
         self.indentor_code = indentor
         model, info = read_model(model_dir)                         # geometry only
@@ -199,21 +208,59 @@ class DeflectionExperiment:
         return out
 
     def _solver(self, key, log10_Pa):
-        from fem.contact import ContactModel
-        from fem.materials import Material
-        from fem.modelfolder import open_model
-
         cm = self._solvers.pop(key, None)
         if cm is None:
-            nu = self.info.get("nu", 0.48) if self.nu is None else self.nu
-            model, system, region, _ = open_model(self.model_dir, material=Material(moduli_MPa(log10_Pa), nu=nu),
-                                                  progress=self.progress)
-            cm = ContactModel.from_fe(model, system, region)
-            self.evaluations += 1
+            cm = self._factorise(log10_Pa)
             while len(self._solvers) >= self.max_factors:
                 self._solvers.pop(next(iter(self._solvers)))
         self._solvers[key] = cm
         return cm
+
+    def _factorise(self, log10_Pa):
+        """A new fem.contact.ContactModel of the model with these log10 moduli [Pa] (one factorisation)."""
+        from fem.contact import ContactModel
+        from fem.materials import Material
+        from fem.modelfolder import open_model
+
+        nu = self.info.get("nu", 0.48) if self.nu is None else self.nu
+        model, system, region, _ = open_model(self.model_dir, material=Material(moduli_MPa(log10_Pa), nu=nu),
+                                              progress=self.progress)
+        self.evaluations += 1
+        return ContactModel.from_fe(model, system, region)
+
+    def solve(self, log10_Pa, depths_mm) -> list:
+        """[fem.contact.ContactResult per depth] of a new factorisation of these moduli, indented
+        at the depths [mm] in order and observed as `profiles` would: the results this experiment
+        caches for a material it has not seen, picklable (no link back to the factorisation).
+        The cache is neither read nor filled."""
+        cm = self._factorise(np.asarray(log10_Pa, float))
+        out = [cm.indent(self.indentor, depth_mm=float(d)) for d in depths_mm]
+        for res in out:
+            res.deflection_mm            # noqa: B018 - observes the pending indentations, as profiles does
+            res._source = None
+        return out
+
+    def evaluate(self, materials, depths_mm) -> None:
+        """Solve the materials (codes or (5,) log10 moduli in Pa) whose modulus ratios are not
+        cached, at depths [mm], as one batch through `map` (one task per distinct ratio) and
+        cache the results as if solved here (same numbers, same order). Without `map`, or with
+        fewer than two new ratios, nothing is done here: they are solved when first asked for."""
+        if self.map is None:
+            return
+        todo = {}
+        for material in materials:
+            v = as_log10(material, self.n_layers)
+            key = ratio_key(v)
+            if key not in self._cache:
+                todo.setdefault(key, v.copy())
+        if len(todo) < 2:
+            return
+        depths = [float(d) for d in depths_mm]
+        with self.progress.task(f"{len(todo)} materials on parallel tasks"):
+            results = self.map(solve_material, [(self.args, v, depths) for v in todo.values()])
+        for (key, v), res in zip(todo.items(), results):
+            self._cache[key] = {"log10_Pa": v, "depth": dict(zip(depths, res))}
+        self.evaluations += len(todo)
 
     def profiles(self, material, depths_mm) -> list[Profile]:
         """Deflection profiles [mm] for a material (code or (5,) log10 moduli in Pa) at depths [mm]."""
@@ -241,6 +288,20 @@ class DeflectionExperiment:
         """Drop every cached material and factorisation."""
         self._cache.clear()
         self._solvers.clear()
+
+
+@functools.lru_cache(maxsize=2)
+def worker_experiment(args: tuple) -> DeflectionExperiment:
+    """The DeflectionExperiment of `DeflectionExperiment.args`, built once per process."""
+    model_dir, indentor, orientation, position_mm, nu, band_mm, side = args
+    return DeflectionExperiment(model_dir, indentor, orientation, position_mm, nu, band_mm, side)
+
+
+def solve_material(item: tuple) -> list:
+    """One task of `DeflectionExperiment.evaluate`: item (experiment args, (5,) log10 moduli
+    [Pa], depths [mm]) -> [ContactResult per depth] (`DeflectionExperiment.solve`)."""
+    args, log10_Pa, depths_mm = item
+    return worker_experiment(args).solve(log10_Pa, depths_mm)
 
 
 # --------------------------------------------------------------------------- waterbed and beam fits
@@ -351,6 +412,7 @@ def layer_study(exp: DeflectionExperiment, base: str = "m43338", layers=(1, 2, 3
                              f"with digits 0-9 around {base}")
         study.layers[int(layer)] = codes
     todo = list(dict.fromkeys(c for codes in study.layers.values() for c in codes))
+    exp.evaluate(todo, depths_mm)                           # in parallel when exp has a map
     for code in exp.progress.bar(todo, desc="materials", unit="material"):
         study.profiles[code] = exp.profiles(code, depths_mm)
     for layer, codes in study.layers.items():

@@ -68,8 +68,9 @@ def fit_material(exp: DeflectionExperiment, data: list[Profile], base: str = "m4
 
     Bounded trust-region least squares (scipy `least_squares`, method 'trf') on the deflection
     residuals at the data distances; forward-difference Jacobian in log10 space (step_log10),
-    each point one model solve (cached by ratios). noise_mm: known measurement noise (else
-    estimated from the residuals) for the uncertainty.
+    each point one model solve (cached by ratios; the Jacobian's columns and the integer
+    roundings are solved as one batch each, in parallel when `exp` has a map). noise_mm: known
+    measurement noise (else estimated from the residuals) for the uncertainty.
     """
     from scipy.optimize import least_squares
 
@@ -86,6 +87,8 @@ def fit_material(exp: DeflectionExperiment, data: list[Profile], base: str = "m4
         raise InputError(f"bounds must be low < high (log10 Pa), got {bounds_log10}")
     x0 = np.clip(b[idx] if start is None else as_log10(start, exp.n_layers)[idx], lo + 1e-6, hi - 1e-6)
 
+    depths = [p.depth_mm for p in data]
+
     def full(x):
         v = b.copy()
         v[idx] = x
@@ -95,12 +98,15 @@ def fit_material(exp: DeflectionExperiment, data: list[Profile], base: str = "m4
         return profile_residuals(exp, full(x), data)
 
     def jac(x):
+        steps = [step_log10 if v + step_log10 <= hi else -step_log10 for v in x]
+        shifted = []
+        for j, h in enumerate(steps):
+            shifted.append(x.copy())
+            shifted[-1][j] += h
+        exp.evaluate([full(x)] + [full(xp) for xp in shifted], depths)     # the columns in parallel
         r0 = fun(x)
         J = np.empty((len(r0), len(x)))
-        for j in range(len(x)):
-            h = step_log10 if x[j] + step_log10 <= hi else -step_log10
-            xp = x.copy()
-            xp[j] += h
+        for j, (h, xp) in enumerate(zip(steps, shifted)):
             J[:, j] = (fun(xp) - r0) / h
         return J
 
@@ -119,8 +125,10 @@ def fit_material(exp: DeflectionExperiment, data: list[Profile], base: str = "m4
         std, corr = np.full(p, np.inf), np.full((p, p), np.nan)
     sens = np.sqrt((J ** 2).mean(axis=0))
     codes = {}
-    for digits in itertools.product(*[sorted({math.floor(v), math.ceil(v)}) for v in sol.x]):
-        v = full(np.clip(np.array(digits, float), 0, 9))
+    roundings = [full(np.clip(np.array(digits, float), 0, 9))
+                 for digits in itertools.product(*[sorted({math.floor(v), math.ceil(v)}) for v in sol.x])]
+    exp.evaluate(roundings, depths)
+    for v in roundings:
         code = code_of(v)
         if code not in codes:
             rr = profile_residuals(exp, v, data)

@@ -121,14 +121,41 @@ def receptor_line(line, sn, dim) -> tuple[int, float] | None:
     return axis, value
 
 
-def run_experiments(model, info, scene: Scene, progress=None, store=None) -> SceneRun:
+def run_experiments(model, info, scene: Scene, progress=None, store=None, only: int | None = None) -> SceneRun:
     """Every experiment of `scene` on a model folder's model (`fem.modelfolder.read_model`).
     progress: optional `common.progress` object (None: silent): the receptor sampler build, the
     factorisation and a bar over the indentations.
     store: optional `fem.response.ResponseStore` of the model folder: the contact problems and
     receptor measures are then answered by its response models (built and stored when missing,
-    `fem.response.stored_responses`); such a run has no full displacement fields (no PVD)."""
+    `fem.response.stored_responses`); such a run has no full displacement fields (no PVD).
+    only: index of the one experiment to indent (`run_experiment`); the model is still
+    factorised for every candidate the whole scene can reach, so its numbers are the full run's."""
     progress = as_progress(progress)
+    sn, runs, warnings, touched, line, grid = _plan(model, info, scene)
+    rc = scene.receptors
+    used = []
+    if store is None:
+        with progress.task(f"receptor operators at {len(grid.points_mm)} points", kind=f"sampler-{model.dim}d",
+                           size=len(grid.points_mm)):
+            sampler = ReceptorSampler(model, grid)
+        system = factorise(model, info, sn.nodes[touched], progress)     # only what the scene can touch
+        cm = ContactModel.from_fe(model, system, CONTACT_REGION[model.dim], observe=sampler.operator)
+    else:
+        responses, sampler, used = stored_responses(store, model, [r.indentor.approach for r in runs], grid,
+                                                    touched, progress)
+        cm = contact_model(model, sn, responses)
+    todo = [(run, off, load) for k, run in enumerate(runs) if only is None or k == only
+            for off in run.experiment.offsets_mm for load in run.experiment.loads]
+    for run, off, load in progress.bar(todo, desc="indentations", unit="indentation"):
+        t0 = time.perf_counter()
+        run.steps.append((off, _indent_one(cm, run, off, load)))
+        run.seconds += time.perf_counter() - t0
+    return SceneRun(model, info, scene, cm, sn, grid, sampler, list(rc.measures), line, runs, warnings, used)
+
+
+def _plan(model, info, scene: Scene):
+    """(contact region's SurfaceNodes, [ExperimentRun without steps], placement warnings,
+    (P,) bool candidates the scene can reach, receptor line, receptor grid) of a scene."""
     scene.check_dim(model.dim)
     sn = model.surface_nodes(CONTACT_REGION[model.dim])
     runs, warnings, touched = [], [], np.zeros(len(sn.nodes), bool)
@@ -142,23 +169,31 @@ def run_experiments(model, info, scene: Scene, progress=None, store=None) -> Sce
     rc = scene.receptors
     line = receptor_line(rc.line, sn, model.dim)
     grid = receptor_grid(*receptor_surface(model, sn), np.asarray(rc.depths_mm, float), rc.spacing_mm, line)
-    used = []
-    if store is None:
-        with progress.task(f"receptor operators at {len(grid.points_mm)} points", kind=f"sampler-{model.dim}d",
-                           size=len(grid.points_mm)):
-            sampler = ReceptorSampler(model, grid)
-        system = factorise(model, info, sn.nodes[touched], progress)     # only what the scene can touch
-        cm = ContactModel.from_fe(model, system, CONTACT_REGION[model.dim], observe=sampler.operator)
-    else:
-        responses, sampler, used = stored_responses(store, model, [r.indentor.approach for r in runs], grid,
-                                                    touched, progress)
-        cm = contact_model(model, sn, responses)
-    todo = [(run, off, load) for run in runs for off in run.experiment.offsets_mm for load in run.experiment.loads]
-    for run, off, load in progress.bar(todo, desc="indentations", unit="indentation"):
-        t0 = time.perf_counter()
-        run.steps.append((off, _indent_one(cm, run, off, load)))
-        run.seconds += time.perf_counter() - t0
-    return SceneRun(model, info, scene, cm, sn, grid, sampler, list(rc.measures), line, runs, warnings, used)
+    return sn, runs, warnings, touched, line, grid
+
+
+def run_experiment(model, info, scene: Scene, index: int, progress=None) -> ExperimentRun:
+    """Experiment `index` of a scene alone (one task of a scene run on several processes): its
+    own factorisation, of every candidate the whole scene can reach, so that its indentations
+    are those of `run_experiments`; the results are observed and detached from the contact
+    model (picklable)."""
+    run = run_experiments(model, info, scene, progress, only=index).experiments[index]
+    for _, res in run.steps:
+        res.observed                 # noqa: B018 - observes the pending indentations
+        res._source = None
+    return run
+
+
+def assemble_run(model, info, scene: Scene, runs: list, progress=None) -> SceneRun:
+    """The SceneRun of a scene whose experiments ran elsewhere (`run_experiment`, `runs` in the
+    scene's order): the receptor sampler is built here; there is no contact model (no PVD)."""
+    progress = as_progress(progress)
+    sn, _, warnings, _, line, grid = _plan(model, info, scene)
+    with progress.task(f"receptor operators at {len(grid.points_mm)} points", kind=f"sampler-{model.dim}d",
+                       size=len(grid.points_mm)):
+        sampler = ReceptorSampler(model, grid)
+    return SceneRun(model, info, scene, None, sn, grid, sampler, list(scene.receptors.measures), line, list(runs),
+                    warnings)
 
 
 def _indent_one(cm: ContactModel, run: ExperimentRun, off, load):

@@ -154,3 +154,57 @@ def perspective_fit(views, frame: Frame, camera: Camera, width_px: int, theta_de
             w = np.where(np.isfinite(phi), touching_depth(coef, phi, theta_deg), 0.0)
             w = np.nan_to_num(np.clip(w, -reach, reach))
     return coef, phi, h, rms
+
+
+def proximal_cut(tables, frame: Frame, camera: Camera, width_px: int, theta_deg: np.ndarray,
+                 outline: np.ndarray, s_first: float, search_mm: float) -> float | None:
+    """Axial position s (mm) of the proximal cut under the pinhole camera, or None.
+
+    In perspective the rim of the cut is seen below the cut's row (its near side lower still)
+    and meets the body's outline smoothly, so no row marks the cut. The body between the cut and
+    the first good section is taken as a prism of that section's outline (finger frame, (k, 2)
+    mm) standing on the cut: its shadow in view i has, in each row s, the border
+    max {u_k : s_k <= s} over the outline points projected at a trial cut z, or the rod's border
+    below. Each border of each view gives the z in [s_first - search_mm, s_first] that fits its
+    measured rows best (least squares; grid of 0.25 px, then 0.02 px); the cut is their median.
+    """
+    D = float(camera.distance_mm)
+    u_c, s_c = camera.centre(frame, width_px)
+    px = frame.scale.sy_mm
+    if s_first >= s_c:
+        return None
+    t = np.deg2rad(theta_deg)
+    x, y = outline[:, 0], outline[:, 1]
+    z_lo = s_first - search_mm
+    found = []
+    for i in range(len(t)):
+        X = -x * np.cos(t[i]) + y * np.sin(t[i])
+        w = -x * np.sin(t[i]) - y * np.cos(t[i])
+        sc = D / (D + w)
+        order = np.argsort(-sc)                    # lowest in the image first (the cut is below s_c)
+        sc_desc = sc[order]
+        u_k = (u_c + (X - u_c) * sc)[order]
+        bottom = s_c + (z_lo - s_c) * sc_desc[0]
+        for side, sign in ((0, -1.0), (1, 1.0)):
+            s, u, _ = tables[i][side]
+            fin = np.isfinite(u)
+            rows = fin & (s <= s_first) & (s >= bottom - 3 * px)
+            if rows.sum() < 5:
+                continue
+            ss, uu = s[rows], sign * u[rows]
+            below = fin & (s < bottom - 3 * px)
+            rod = np.median(sign * u[below][-max(3, int(round(1.0 / px))):]) if below.sum() >= 3 else uu.min()
+            reach = np.maximum.accumulate(sign * u_k)             # border of the prism's shadow
+
+            def cost(z):
+                # outline point k lies at or below row s when sc_k >= (s - s_c) / (z - s_c)
+                need = (ss[None] - s_c) / (z[:, None] - s_c)
+                j = np.searchsorted(-sc_desc, -need, side="right") - 1
+                pred = np.maximum(np.where(j >= 0, reach[np.maximum(j, 0)], -np.inf), rod)
+                return ((pred - uu[None]) ** 2).sum(axis=1)
+
+            grid = np.arange(z_lo, s_first + 1e-9, 0.25 * px)
+            z0 = grid[int(np.argmin(cost(grid)))]
+            fine = z0 + np.arange(-0.3, 0.3 + 1e-9, 0.02) * px
+            found.append(fine[int(np.argmin(cost(fine)))])
+    return float(np.median(found)) if found else None

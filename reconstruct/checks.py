@@ -17,6 +17,9 @@ FOLD_TOL_PX = 1.0           # depth of a fold of the outline (inside its own hul
 JUMP_TOL = 0.12             # relative size change against the neighbours' interpolation
 PARALLEL_RMS_PX = 0.12      # median tangent disagreement that a parallel projection does not explain
 CUT_TOL_PX = 1.0            # pinhole camera: the proximal cut is where the rim's disagreement ends
+PARALLEL_ERR_PX = 0.5       # error of the parallel projection below which it is not worth a warning
+CUT_SEARCH_PX = 40          # pinhole camera: how far below the first section the cut is sought
+ROD_MARGIN_PX = 5           # rows skipped after the rod-to-finger step (blurred corner)
 
 
 def fold_depth(curve: np.ndarray) -> float:
@@ -79,39 +82,81 @@ def consistent_sections(z_mm: np.ndarray, curves: np.ndarray, rms_px: np.ndarray
     return keep, "sections dropped as inconsistent: " + "; ".join(parts)
 
 
-def check_parallel(views, frame, theta_deg, levels, k_max, rms_mm, width_px) -> str | None:
-    """Without camera_distance_mm: a warning when the tangents disagree more than a parallel
-    projection explains, with the error it causes and the camera distance that fits the views
-    (None when the parallel projection holds)."""
-    from reconstruct.camera import Camera, border_tables, perspective_fit
-    from reconstruct.sections import support_curve
+def check_parallel(views, frame, theta_deg, levels, k_max, rms_mm, width_px, s_lo: float,
+                   rod: bool) -> str | None:
+    """Without camera_distance_mm: a warning when a parallel projection misplaces the sections by
+    more than PARALLEL_ERR_PX, with the camera distance that fits the views and that error (None
+    when the parallel projection holds).
+
+    levels: (m,) section positions s (mm) of the parallel reconstruction, rms_mm (m,) its tangent
+    disagreement, s_lo its z = 0. The distance is the one (of a log grid, refined once) whose
+    pinhole fit makes the tangents agree best; the error is the largest support-function
+    difference (the Hausdorff distance of convex sections) between the parallel section at s and
+    the pinhole one at the same s (below the pinhole's first consistent section: that section);
+    with a rod the warning also gives how far the parallel z = 0 lies from the cut that the
+    pinhole camera finds (camera.proximal_cut).
+    """
+    from reconstruct.camera import Camera, border_tables, perspective_fit, proximal_cut
+    from reconstruct.calibrate import sample_borders
+    from reconstruct.sections import fit_support, support_curve, support_samples, support_values
 
     px = frame.scale.sx_mm
     med = float(np.nanmedian(rms_mm)) / px
     if not med > PARALLEL_RMS_PX:
         return None
-    sub = levels[1:-1:max(1, len(levels) // 8)] if len(levels) > 4 else levels
+    step = max(1, len(levels) // 8)
+    # every section next to the cut (the rim is seen there), every step-th one above, not the tip
+    sub = np.concatenate([levels[:4], levels[4:-1:step]]) if len(levels) > 6 else levels
     tables = border_tables(views, frame)
-    best = (np.inf, None, None, None)
-    for d in (30.0, 45.0, 60.0, 90.0, 120.0, 180.0, 250.0, 400.0, 700.0, 1200.0):
-        coef, _, _, rms = perspective_fit(views, frame, Camera(d), width_px, theta_deg, sub, k_max,
-                                          iterations=2, tables=tables)
-        score = float(np.nanmedian(rms)) / px
-        if score < best[0]:
-            best = (score, d, coef, rms / px)
-    score, d, coef, rms_px = best
-    if score > 0.5 * med:                   # no camera distance explains it
+
+    def score(d):
+        rms = perspective_fit(views, frame, Camera(d), width_px, theta_deg, sub, k_max, iterations=2,
+                              tables=tables)[3]
+        return float(np.nanmedian(rms)) / px
+
+    grid = [30.0, 45.0, 60.0, 90.0, 120.0, 180.0, 250.0, 400.0, 700.0, 1200.0]
+    scores = [score(d) for d in grid]
+    j = int(np.argmin(scores))
+    for k in (j - 1, j + 1):                  # refine once between the best and its neighbours
+        if 0 <= k < len(grid):
+            d = float(np.sqrt(grid[j] * grid[k]))
+            grid.append(d)
+            scores.append(score(d))
+    j = int(np.argmin(scores))
+    d, best = grid[j], scores[j]
+    if best > 0.5 * med:                   # no camera distance explains it
         return (f"the views' tangents disagree by {med:.2f} px rms: check the images, the view angles "
                 f"and the rotation axis")
-    from reconstruct.sections import fit_support, support_samples
-    from reconstruct.calibrate import sample_borders
+    camera = Camera(d)
+    sub_rms = rms_mm[np.searchsorted(levels, sub)] / px          # the parallel fit's disagreement
+    coef, _, _, rms = perspective_fit(views, frame, camera, width_px, theta_deg, sub, k_max, tables=tables)
+    ok = np.flatnonzero(rms / px <= TANGENT_TOL_PX)
+    z0, corner = "", np.zeros(len(sub), bool)
+    if rod and len(ok):
+        cut = proximal_cut(tables, frame, camera, width_px, theta_deg, support_curve(coef[:, ok[0]:ok[0] + 1])[0],
+                           float(sub[ok[0]]), float(sub[ok[0]]) - s_lo + CUT_SEARCH_PX * px)
+        if cut is not None:
+            z0 = f" and z = 0 by {(s_lo - cut) / px:+.1f} px"
+            lowest = max(float(sub[ok[0]]), cut + ROD_MARGIN_PX * px)
+            # next to the cut the pinhole sections are not trusted (blurred corner); parallel sections
+            # there whose tangents disagree beyond the body's (the rim is seen) and those below the
+            # cut are compared with the first trusted one, the others left out
+            rim = sub_rms - med > TANGENT_TOL_PX
+            corner = (sub >= cut) & (sub < lowest) & ~rim
+            low = (sub < cut) | ((sub < lowest) & rim)
+            if low.any():
+                coef, _, _, rms = perspective_fit(views, frame, camera, width_px, theta_deg,
+                                                  np.where(low, lowest, sub), k_max, tables=tables)
     left, right = sample_borders(views, frame, sub)
     phi, h = support_samples(left, right, theta_deg)
-    ortho = support_curve(fit_support(phi, h, k_max))
-    persp = support_curve(coef)
-    good = rms_px <= TANGENT_TOL_PX                 # sections the fitted camera explains
-    moved = np.linalg.norm(ortho - persp, axis=-1).max(axis=1) / px
+    dirs = np.linspace(0.0, 2 * np.pi, 720, endpoint=False)
+    moved = np.abs(support_values(fit_support(phi, h, k_max), dirs) - support_values(coef, dirs)).max(axis=1) / px
+    # sections the fitted camera explains, of those the parallel reconstruction keeps (consistent_sections)
+    kept = sub_rms <= max(TANGENT_TOL_PX, 4.0 * med)
+    good = (rms / px <= TANGENT_TOL_PX) & kept & ~corner
     err = float(np.max(moved[good])) if good.any() else float(np.nanmedian(moved))
+    if err <= PARALLEL_ERR_PX:
+        return None
     return (f"the views' tangents disagree by {med:.2f} px rms, more than a parallel projection explains: "
-            f"they fit a camera about {d:.0f} mm from the rotation axis, which moves the sections by up to "
-            f"{err:.1f} px; set camera_distance_mm (measured) in turntable.toml")
+            f"they fit a camera about {d:.0f} mm from the rotation axis, at which the parallel projection "
+            f"misplaces the sections by up to {err:.1f} px{z0}; set camera_distance_mm (measured) in turntable.toml")

@@ -14,14 +14,13 @@ from common.errors import InputError
 from common.staging import staged_output, write_json
 from reconstruct.sections import (N_POINTS, choose_levels, convex_section, fit_support, harmonics_for,
                                   support_curve, support_samples, support_values, tangent_polygon)
-from reconstruct.camera import Camera, border_tables, perspective_fit
+from reconstruct.camera import Camera, border_tables, perspective_fit, proximal_cut
 from reconstruct.lens import calibrate_lens, undistort_borders
-from reconstruct.checks import CUT_TOL_PX, TANGENT_TOL_PX, check_parallel, consistent_sections
+from reconstruct.checks import (CUT_SEARCH_PX, CUT_TOL_PX, ROD_MARGIN_PX, TANGENT_TOL_PX, check_parallel,
+                               consistent_sections)
 from reconstruct.silhouette import Borders, extract_borders
 from reconstruct.surface import loft
 from reconstruct.turntable import Turntable, load_turntable
-
-ROD_MARGIN_PX = 5          # rows skipped after the rod-to-finger step (blurred corner)
 
 
 @dataclass
@@ -235,7 +234,7 @@ def reconstruct(table: Turntable, spacing_mm=(0.5, 2.0), tol_mm: float = 0.02,
         coef_l = fit_support(phi, h_l, k_max)
         rms_l = np.sqrt(np.mean((support_values(coef_l, phi).T - h_l) ** 2, axis=0))
         phi_l = np.repeat(phi[:, None], len(levels), axis=1)
-        parallel = check_parallel(views, frame, theta, levels, k_max, rms_l, width_px)
+        parallel = check_parallel(views, frame, theta, levels, k_max, rms_l, width_px, s_lo, rod)
         if parallel:
             warnings.append(parallel)
     else:
@@ -247,9 +246,10 @@ def reconstruct(table: Turntable, spacing_mm=(0.5, 2.0), tol_mm: float = 0.02,
         width = np.where(np.isfinite(h_f).all(axis=0), np.max(h_f[:n] + h_f[n:], axis=0), np.nan)
         s_lo, s_hi, trims = _trim(s_fine, width, rod, tip_fraction, ds, scale.sy_mm, margin_px=0.0)
         # the rim of the proximal cut is seen below the cut in perspective, and its tangents
-        # disagree by many px: the cut (z = 0) is where they stop doing so; the first section lies
-        # ROD_MARGIN_PX past it (as in the parallel path: closer to the blurred corner of the cut
-        # the tangents agree but are off by up to 1 px) where the tangents agree to TANGENT_TOL_PX
+        # disagree by many px: the first section lies ROD_MARGIN_PX past where they stop doing so
+        # (as in the parallel path: closer to the blurred corner of the cut the tangents agree but
+        # are off by up to 1 px) where the tangents agree to TANGENT_TOL_PX; with a rod, the cut
+        # itself (z = 0) comes from the rim's shadow (camera.proximal_cut)
         rms_px = np.nan_to_num(rms_f / scale.sx_mm, nan=np.inf)
         ok = rms_px <= TANGENT_TOL_PX
         i_lo, i_hi = np.searchsorted(s_fine, s_lo), np.searchsorted(s_fine, s_hi, side="right") - 1
@@ -267,6 +267,11 @@ def reconstruct(table: Turntable, spacing_mm=(0.5, 2.0), tol_mm: float = 0.02,
         if s_hi - s_first < 2 * ds:
             raise InputError("the tangents of the views disagree on every section: check camera_distance_mm "
                              "in turntable.toml and the images")
+        if rod:                       # z = 0 at the cut: fit the rim's shadow to the borders below
+            cut = proximal_cut(tables, frame, camera, width_px, theta, support_curve(coef_f[:, i_first:i_first + 1])[0],
+                               s_first, CUT_SEARCH_PX * scale.sy_mm)
+            if cut is not None and cut < s_first:
+                s_lo = cut
         inside = (s_fine >= s_first) & (s_fine <= s_hi)
         levels = choose_levels(s_fine[inside], support_values(coef_f[:, inside], dirs), spacing_mm, tol_mm)
         coef_l, phi_l, h_l, rms_l = perspective_fit(views, frame, camera, width_px, theta, levels, k_max,

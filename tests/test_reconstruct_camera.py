@@ -79,6 +79,29 @@ def test_perspective_set_without_camera_distance_warns_and_stays_consistent(macr
     assert err["max_px"] > 1.0
 
 
+@pytest.mark.parametrize("distance", [60.0, 500.0])
+def test_proximal_cut_and_parallel_warning_at_other_distances(distance, tmp_path):
+    """z = 0 within 1 px of the cut with the key at 60 and 500 mm (the rim of the cut is seen
+    up to 30 px below it at 60 mm); without the key, a warning at 60 mm that names the distance,
+    the error and the key, and none at 500 mm, where a parallel projection errs by < 0.5 px."""
+    folder = tmp_path / "set"
+    render_turntable(make_shape("fingertip"), folder, n_views=36, camera_distance_mm=distance,
+                     write_camera=True, seed=3, **SMALL)
+    rec, doc, err = _errors(folder)
+    assert abs(err["z_shift_mm"]) <= 1.0 * SMALL["mm_per_px"], err["z_shift_mm"] / SMALL["mm_per_px"]
+    assert not [w for w in rec.warnings if "camera_distance_mm" in w], rec.warnings
+    toml = folder / "turntable.toml"
+    toml.write_text("".join(l + "\n" for l in toml.read_text().splitlines() if "camera" not in l))
+    rec, doc, err = _errors(folder)
+    note = [w for w in rec.warnings if "camera_distance_mm" in w]
+    if distance >= 500:
+        assert not note and err["max_px"] < 0.6, (note, err)
+    else:
+        assert len(note) == 1 and "about 60 mm" in note[0] and "z = 0 by" in note[0], note
+        predicted = float(note[0].split("by up to ")[1].split(" px")[0])
+        assert predicted > 1.0 and err["max_px"] > 1.0
+
+
 def test_huge_camera_distance_is_the_parallel_projection(tmp_path):
     folder = tmp_path / "par"
     render_turntable(make_shape("sphere"), folder, n_views=36, size_px=(200, 260), mm_per_px=0.16)
