@@ -218,6 +218,17 @@ def _run_mesh(args):
         print(text)
 
 
+def _material_and_receptor_options(p):
+    """--material, --nu and the receptor grid: the same for `indent` and `prepare`, so a prepared
+    response model matches the indent command given the same values."""
+    p.add_argument("--material", help="material code or moduli (default: the model's)")
+    p.add_argument("--nu", type=NONNEGATIVE, help="Poisson ratio (default: the model's)")
+    p.add_argument("--receptor-depths", default="0.5,0.75,1.0", help="receptor depths in mm (default 0.5,0.75,1.0)")
+    p.add_argument("--receptor-spacing", type=POSITIVE, default=1.0, help="receptor spacing in mm (default 1)")
+    p.add_argument("--line", help="receptors only along a line: z=<mm>, z=middle or x=<mm> (default: the "
+                                  "whole pad)")
+
+
 # --------------------------------------------------------------------------- indent
 def _add_indent(sub):
     p = sub.add_parser("indent", help="rigid indentors on a meshed model: depth or force control, sweeps "
@@ -241,12 +252,7 @@ def _add_indent(sub):
                                                               "indentor carries the force")
     p.add_argument("--max-depth", type=POSITIVE, default=5.0, help="depth limit for --force in mm (default 5)")
     p.add_argument("--sweep", help="move the indentor: x=start:stop:step or z=start:stop:step (mm)")
-    p.add_argument("--material", help="material code or moduli (default: the model's)")
-    p.add_argument("--nu", type=NONNEGATIVE, help="Poisson ratio (default: the model's)")
-    p.add_argument("--receptor-depths", default="0.5,0.75,1.0", help="receptor depths in mm (default 0.5,0.75,1.0)")
-    p.add_argument("--receptor-spacing", type=POSITIVE, default=1.0, help="receptor spacing in mm (default 1)")
-    p.add_argument("--line", help="receptors only along a line: z=<mm>, z=middle or x=<mm> (default: the "
-                                  "whole pad)")
+    _material_and_receptor_options(p)
     p.add_argument("--pvd", action=argparse.BooleanOptionalAction, default=None,
                    help="full fields per indentation as a PVD series (default: on up to 20 indentations)")
     p.add_argument("--plots", action=argparse.BooleanOptionalAction, default=None,
@@ -285,13 +291,8 @@ def _add_prepare(sub):
     p = sub.add_parser("prepare", help="store a model's response model (compliance of the pad and receptor "
                                        "response) so later indent commands answer without factorising")
     p.add_argument("model", help="model folder with mesh.vtu (+ model.json) from `pipeline.py mesh`")
-    p.add_argument("--material", help="material code or moduli (default: the model's)")
-    p.add_argument("--nu", type=float, help="Poisson ratio (default: the model's)")
     p.add_argument("--approach", help="approach direction x,y,z (default: the model's support; -y in 2D)")
-    p.add_argument("--receptor-depths", default="0.5,0.75,1.0", help="receptor depths in mm (default 0.5,0.75,1.0)")
-    p.add_argument("--receptor-spacing", type=float, default=1.0, help="receptor spacing in mm (default 1)")
-    p.add_argument("--line", help="receptors only along a line: z=<mm>, z=middle or x=<mm> (default: the "
-                                  "whole pad)")
+    _material_and_receptor_options(p)
     p.add_argument("--quiet", action="store_true", help="no progress and no summary")
     p.set_defaults(run=_run_prepare)
 

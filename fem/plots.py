@@ -9,6 +9,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from fem.analysis import model_values
+from fem.runfolder import pad3
 
 
 def save(fig: Figure, path, dpi: int = 110) -> None:
@@ -126,8 +127,7 @@ def indent_figures(run, scene_run, tables) -> dict[str, Figure]:
                                                            rows["depth_mm"] if key != "depth_mm" and
                                                            run.experiment.force_N is not None else None)
     # deflection and pressure across the indentor (nodes near its centre line), last step(s)
-    x3 = np.zeros((len(scene_run.surface.x), 3))
-    x3[:, :scene_run.surface.x.shape[1]] = scene_run.surface.x
+    x3 = pad3(scene_run.surface.x)
     u, v = (x3 - ind.origin_mm) @ ind.e1, (x3 - ind.origin_mm) @ ind.e2
     near = np.abs(u) <= max(0.5, np.sort(np.abs(u))[min(len(u) - 1, 50)])
     order = np.argsort(v[near])
@@ -136,7 +136,7 @@ def indent_figures(run, scene_run, tables) -> dict[str, Figure]:
     figures[f"{name}_profile.png"] = indent_profile_figure(name, v[near][order], shown)
     # receptor measures: profile across the pad (last step) or against the sweep position
     g = scene_run.sampler.grid
-    site_x = np.pad(g.sites_mm, ((0, 0), (0, 3 - g.sites_mm.shape[1]))) - ind.origin_mm
+    site_x = pad3(g.sites_mm) - ind.origin_mm
     site_u, site_v = site_x @ ind.e1, site_x @ ind.e2
     # a pad grid in 3D: only the sites on the indentor's centre line (within 0.5 mm, or the nearest)
     on_line = np.abs(site_u) <= max(0.5, np.abs(site_u).min() + 1e-9)

@@ -75,9 +75,19 @@ class LinearSystem:
             return np.zeros(len(nodes), int), np.zeros(len(nodes), bool), np.zeros(len(nodes), bool)
         pos = np.minimum(np.searchsorted(have, nodes), max(len(have) - 1, 0))
         dofs = self.model.node_dofs(nodes)
-        axis = np.flatnonzero(np.abs(along) > 1 - 1e-12)
-        held = (np.isin(dofs[:, axis[0]], self.fixed) if axis.size else np.isin(dofs, self.fixed).all(axis=1))
+        axis = coordinate_axis(along)
+        held = np.isin(dofs[:, axis], self.fixed) if axis is not None else np.isin(dofs, self.fixed).all(axis=1)
         return pos, have[pos] == nodes, held
+
+    def _condensed_only(self, nodes, direction):
+        """(positions in the condensed set (k,), indices of the condensed nodes among `nodes`);
+        ValueError unless every node is condensed or held along the direction."""
+        pos, inside, held = self._stored(nodes, direction)
+        if not (inside | held).all():
+            raise ValueError(f"this system stores no compliance along {np.round(direction, 6).tolist()} for "
+                             f"{int((~(inside | held)).sum())} of the nodes (not condensed): factorise with "
+                             f"condense=")
+        return pos, np.flatnonzero(inside)
 
     def stored(self, nodes, direction) -> np.ndarray:
         """(k,) bool: which P2 nodes have a stored compliance along the unit `direction` (condensed
@@ -90,11 +100,7 @@ class LinearSystem:
         a force f_j along it at node j moves node i by C_ij f_j along it. No solves: the inverse of
         the stored Schur complement. Zero rows and columns for nodes held along the direction.
         Raises ValueError unless every node is `stored`."""
-        pos, inside, held = self._stored(nodes, direction)
-        if not (inside | held).all():
-            raise ValueError(f"this system stores no compliance along {np.round(direction, 6).tolist()} for "
-                             f"{int((~(inside | held)).sum())} of the nodes: factorise with condense=")
-        i = np.flatnonzero(inside)
+        pos, i = self._condensed_only(nodes, direction)
         order = self._factor.condensed_order[pos[i]]
         block = self._factor.compliance_block()
         if len(i) == len(nodes) == len(block) and np.array_equal(order, np.arange(len(block))):
@@ -111,17 +117,13 @@ class LinearSystem:
         as `solve` (sets `residual` and `refined`: refinement steps were taken and gained);
         False skips both (`residual` NaN, e.g. once a checked block showed they are not needed).
         Raises ValueError unless every node is `stored`."""
-        pos, inside, held = self._stored(nodes, direction)
-        if not (inside | held).all():
-            raise ValueError(f"{int((~(inside | held)).sum())} of the nodes are not condensed along "
-                             f"{np.round(direction, 6).tolist()}: factorise with condense=")
-        i = np.flatnonzero(inside)
+        pos, i = self._condensed_only(nodes, direction)
         tol = self._factor.refine_tol
         u = np.zeros((self.model.ndof, len(pos)))
         if len(i):
             along = self.condensed[1]                   # a condensed unknown is the DOF along a
-            axis = np.flatnonzero(np.abs(along) > 1 - 1e-12)    # coordinate axis, else along itself
-            unit = np.eye(self.model.dim)[axis[0]] if axis.size else along
+            axis = coordinate_axis(along)               # coordinate axis, else along itself
+            unit = np.eye(self.model.dim)[axis] if axis is not None else along
             sign = np.sign(np.asarray(direction, float)[:self.model.dim] @ unit)
             u[np.ix_(self.free, i)] = sign * self._factor.solve_condensed(self._factor.condensed_order[pos[i]], check)
         f = self._factor
@@ -142,6 +144,12 @@ class LinearSystem:
         return u
 
 
+def coordinate_axis(a) -> int | None:
+    """Index of the coordinate axis the unit vector `a` lies along (either sign), else None."""
+    axis = np.flatnonzero(np.abs(np.asarray(a, float)) > 1 - 1e-12)
+    return int(axis[0]) if axis.size else None
+
+
 def condense_plan(model, free, nodes, direction):
     """(nodes (k,), unit direction (dim,), free-DOF position of each node's displacement along
     it (k,), rotation T (n_free, n_free) or None) for `Model.system(condense=...)`;
@@ -152,10 +160,10 @@ def condense_plan(model, free, nodes, direction):
     dofs = model.node_dofs(nodes)
     is_free = np.zeros(model.ndof, bool)
     is_free[free] = True
-    axis = np.flatnonzero(np.abs(a) > 1 - 1e-12)
-    if axis.size:                                       # a coordinate axis: its DOF as is
-        keep = is_free[dofs[:, axis[0]]]
-        return nodes[keep], a, np.searchsorted(free, dofs[keep, axis[0]]), None
+    axis = coordinate_axis(a)
+    if axis is not None:                                # a coordinate axis: its DOF as is
+        keep = is_free[dofs[:, axis]]
+        return nodes[keep], a, np.searchsorted(free, dofs[keep, axis]), None
     keep = is_free[dofs].all(axis=1)
     nodes, pos = nodes[keep], np.searchsorted(free, dofs[keep])        # (k, dim)
     e0 = np.eye(model.dim)[np.argmin(np.abs(a))]        # local axes (rows); local 1 = along a
