@@ -147,6 +147,8 @@ def _add_mesh(sub):
     p.add_argument("--section-z", type=FINITE, metavar="Z",
                    help="2D: mesh the five-layer cross-section of the 3D model at this z (mm) instead")
     p.add_argument("--bone", action="store_true", help="2D cylinders: add the central 2 mm bone (layer 5)")
+    p.add_argument("--solid-fluid", action="store_true", help="2D cylinders: a 1 mm solid layer around an "
+                   "incompressible fluid core (layer 6; thesis 4.6)")
     p.add_argument("--size", type=POSITIVE, help="target edge length on the volar skin / top surface in mm "
                                                "(default 0.5 in 3D, 0.125 in 2D)")
     p.add_argument("--coarse", type=POSITIVE, help="largest edge length in mm (default 3.0 in 3D, 1.0 in 2D)")
@@ -198,7 +200,7 @@ def _mesh_options(args) -> dict:
                            bone_profile=args.bone_profile, bone_offset_mm=args.bone_offset,
                            nail_span_deg=args.nail_span, nail_z_frac=args.nail_z, support_span_deg=args.support_span,
                            support_z_frac=args.support_z, support_incline_deg=args.support_incline, tip=args.tip)
-    return dict(out=args.out, source=args.source, preset=args.preset, section_z_mm=args.section_z, bone=args.bone,
+    return dict(out=args.out, source=args.source, preset=args.preset, section_z_mm=args.section_z, bone=args.bone, solid_fluid=args.solid_fluid,
                 size_mm=args.size, coarse_mm=args.coarse, growth=args.growth, fine_depth_mm=args.fine_depth,
                 options=options)
 
@@ -547,9 +549,36 @@ def _run_batch(args):
         print(text)
 
 
+# --------------------------------------------------------------------------- thesis reproduction
+def _add_reproduce(sub):
+    p = sub.add_parser("reproduce", help="run the thesis's experiments (chapters 4-7) and write a report: "
+                                         "what the thesis states, the project's number, a verdict")
+    p.add_argument("--out", required=True, help="report folder (new, empty, or an earlier reproduce run "
+                                                "of the same kind to resume)")
+    p.add_argument("--quick", action="store_true", help="coarse meshes (0.25 mm in the top 1 mm instead "
+                                                        "of the thesis's 0.125 mm)")
+    p.add_argument("--quiet", action="store_true", help="no progress and no summary")
+    p.set_defaults(run=_run_reproduce, check=_check_reproduce)
+
+
+def _check_reproduce(args):
+    from commands.reproduce import check_out
+
+    check_out(args.out, args.quick)
+
+
+def _run_reproduce(args):
+    from commands.reproduce import run_reproduce
+
+    text = run_reproduce(args.out, quick=args.quick, progress=not args.quiet)
+    if not args.quiet:
+        print(text)
+
+
 # --------------------------------------------------------------------------- main
 COMMANDS = [_add_reconstruct, _add_render, _add_mesh, _add_prepare, _add_indent, _add_study_layers, _add_fit_material,
-            _add_line_load, _add_contact_series, _add_analyze, _add_run, _add_batch]
+            _add_line_load, _add_contact_series, _add_analyze, _add_run, _add_batch,
+            _add_reproduce]
 
 
 def build_parser(prog: str = "pipeline.py") -> argparse.ArgumentParser:

@@ -82,7 +82,7 @@ def _given(**kw):
     return {k: v for k, v in kw.items() if v is not None}
 
 
-def check_options(out, source=None, preset=None, section_z_mm=None, bone=False, size_mm=None, coarse_mm=None,
+def check_options(out, source=None, preset=None, section_z_mm=None, bone=False, solid_fluid=False, size_mm=None, coarse_mm=None,
                   growth=None, fine_depth_mm=None, options: ModelOptions = ModelOptions()):
     """Validate `run_mesh`'s options without reading any file: (2D?, fem.mesh.Sizing or
     fem.mesh2d.Sizing2D). InputError names the first bad one."""
@@ -93,6 +93,10 @@ def check_options(out, source=None, preset=None, section_z_mm=None, bone=False, 
                          f"{sorted(PRESET_PARAMS) + list(PRESETS_2D)}")
     if bone and preset not in ("cylinder8", "cylinder16"):
         raise InputError("--bone is for the 2D cylinders (--preset cylinder8 or cylinder16)")
+    if solid_fluid and preset not in ("cylinder8", "cylinder16"):
+        raise InputError("--solid-fluid is for the 2D cylinders (--preset cylinder8 or cylinder16)")
+    if solid_fluid and bone:
+        raise InputError("a solid-fluid cylinder has no bone (thesis 4.6): give --bone or --solid-fluid, not both")
     two_d = preset in PRESETS_2D or section_z_mm is not None
     if preset in PRESETS_2D and source is not None:
         raise InputError(f"--preset {preset} is a 2D model: give no sections folder")
@@ -107,18 +111,18 @@ def check_options(out, source=None, preset=None, section_z_mm=None, bone=False, 
     return two_d, sizing
 
 
-def run_mesh(out, source=None, preset=None, section_z_mm=None, bone=False, size_mm=None, coarse_mm=None,
+def run_mesh(out, source=None, preset=None, section_z_mm=None, bone=False, solid_fluid=False, size_mm=None, coarse_mm=None,
              growth=None, fine_depth_mm=None, options: ModelOptions = ModelOptions(), z_range_mm=None,
              tip_width_frac: float = 0.9, force=False, progress=True) -> str:
     """`pipeline.py mesh`: mesh.vtu and model.json in `out`; returns the summary text.
 
     source: folder with sections.json (or the file); preset: 3D 'human'/'monkey' or a 2D preset
     (PRESETS_2D); section_z_mm: mesh the 2D cross-section of the 3D model at this z instead; bone:
-    the 2D cylinders' central bone; size_mm, coarse_mm, growth, fine_depth_mm: mesh sizing (None:
+    the 2D cylinders' central bone; solid_fluid: their fluid core inside 1 mm of solid; size_mm, coarse_mm, growth, fine_depth_mm: mesh sizing (None:
     the defaults); z_range_mm: (z0, z1) sections used; force: rebuild a current 3D mesh."""
     from fem import mesh2d
 
-    two_d, sizing = check_options(out, source, preset, section_z_mm, bone, size_mm, coarse_mm, growth,
+    two_d, sizing = check_options(out, source, preset, section_z_mm, bone, solid_fluid, size_mm, coarse_mm, growth,
                                   fine_depth_mm, options)
     if two_d:
         if section_z_mm is not None:
@@ -126,7 +130,7 @@ def run_mesh(out, source=None, preset=None, section_z_mm=None, bone=False, size_
                                     z_range_mm=_tuple(z_range_mm), tip_width_frac=tip_width_frac)
             domain = mesh2d.section_domain(model, section_z_mm)
         else:
-            domain = mesh2d.preset_domain(preset, bone=bone)
+            domain = mesh2d.preset_domain(preset, bone=bone, solid_fluid=solid_fluid)
         _, rep = mesh2d.run_mesh2d(out, domain, sizing, progress=progress)
         return mesh2d.summary(rep, out) + (size_note(model) if section_z_mm is not None else "")
     from fem import mesh as mesh3d

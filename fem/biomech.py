@@ -27,11 +27,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from fem.reference import beam_deflection, waterbed_deflection
 from common.errors import InputError
+from fem.materials import BONE_LAYER, FLUID_LAYER
+from fem.reference import beam_deflection, waterbed_deflection
 
 N_LAYERS = 5
-BONE_LAYER = 5
 
 
 # --------------------------------------------------------------------------- codes and moduli
@@ -129,7 +129,8 @@ class DeflectionExperiment:
     model_dir: folder with mesh.vtu (+ model.json) from `pipeline.py mesh` (2D or 3D).
     indentor: indentor code (default 'wedge'); orientation: default 'parallel' in 2D (the edge
     along z, i.e. the line load of the plane-strain section) and 'perpendicular' in 3D (thesis
-    6.2.1); position_mm: (x, z) of the load, default the middle of the pad (2D: the section's
+    6.2.1); rigid_bone: hold the bone (layer 5) instead of leaving it elastic and free;
+    position_mm: (x, z) of the load, default the middle of the pad (2D: the section's
     centroid x); band_mm: 3D only, surface nodes within this distance of the profile line (the
     line through the load across the wedge) make the profile; side: see `side_profile`;
     max_factors: factorised models kept (least recently used dropped; their contact results stay
@@ -143,21 +144,22 @@ class DeflectionExperiment:
     """
 
     def __init__(self, model_dir, indentor: str = "wedge", orientation=None, position_mm=None,
-                 nu=None, band_mm: float = 0.25, side: str = "mean", max_factors: int = 4, progress=None,
-                 map=None):
+                 nu=None, band_mm: float = 0.25, side: str = "mean", rigid_bone: bool = False,
+                 max_factors: int = 4, progress=None, map=None):
         from common.progress import as_progress
         from fem.modelfolder import CONTACT_REGION, read_model
 
         self.progress = as_progress(progress)
         self.map = map
         self.args = (str(model_dir), indentor, orientation, None if position_mm is None else tuple(position_mm),
-                     nu, band_mm, side)     # what rebuilds this experiment on a worker (`solve_material`)
+                     nu, band_mm, side, rigid_bone)     # what rebuilds this experiment on a worker (`solve_material`)
         self.model_dir, self.nu, self.band_mm, self.side = model_dir, nu, band_mm, side
+        self.rigid_bone = bool(rigid_bone)
         self.indentor_code = indentor
         model, info = read_model(model_dir)                         # geometry only
         region = CONTACT_REGION[model.dim]
         self.dim, self.region, self.info = model.dim, region, info
-        self.n_layers = len(set(model.layer.tolist()))
+        self.n_layers = int(model.layer[model.layer != FLUID_LAYER].max())    # code digits: layers 1..n
         sn = model.surface_nodes(region)
         self.points_mm, self.ndof = sn.x, model.ndof     # contact candidates (ContactModel.from_fe's)
         if self.dim == 2:
@@ -223,7 +225,8 @@ class DeflectionExperiment:
         from fem.modelfolder import open_model
 
         nu = self.info.get("nu", 0.48) if self.nu is None else self.nu
-        model, system, region, _ = open_model(self.model_dir, material=Material(moduli_MPa(log10_Pa), nu=nu),
+        model, system, region, _ = open_model(self.model_dir, material=Material(moduli_MPa(log10_Pa), nu=nu,
+                                                                                rigid_bone=self.rigid_bone),
                                               progress=self.progress)
         self.evaluations += 1
         return ContactModel.from_fe(model, system, region)

@@ -2,6 +2,12 @@
 
 Units: Young's modulus in MPa (1e4 Pa = 0.01 MPa). Layers are positive ints, 1..5 from the
 outside in (5 = bone). `Material("m43338")` = 1e4, 1e3, 1e3, 1e3, 1e8 Pa with nu = 0.48.
+
+Layer 6 (FLUID_LAYER) is an incompressible inviscid fluid (the thesis's solid-fluid model, 4.6):
+it needs no modulus. It has no shear stiffness; fem.solver gives it one uniform pressure per
+model, whose bulk modulus is FLUID_BULK_RATIO times the stiffest solid's (the volume is kept to
+about 1 / FLUID_BULK_RATIO of the solid's volumetric strain; a larger ratio only loses digits in
+the solver's residual check), and holds the fluid's inner nodes, which carry nothing.
 """
 from __future__ import annotations
 
@@ -15,6 +21,8 @@ from common.errors import InputError
 
 NU_MAX = 0.4999
 BONE_LAYER = 5
+FLUID_LAYER = 6
+FLUID_BULK_RATIO = 1e7
 
 
 def _check_nu(nu: float) -> float:
@@ -83,10 +91,19 @@ class Material:
     def lame(self, layer: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Lame parameters (mu, lambda) in MPa for each entry of `layer` (int array)."""
         layer = np.asarray(layer)
-        missing = sorted(set(np.unique(layer).tolist()) - set(self.E_MPa))
+        fluid = layer == FLUID_LAYER
+        present = set(np.unique(layer[~fluid]).tolist())
+        missing = sorted(present - set(self.E_MPa))
         if missing:
             raise InputError(f"the mesh has layers {missing} but material {self} defines only "
                              f"layers {sorted(self.E_MPa)}; give a modulus for every layer")
-        E = np.vectorize(self.E_MPa.get, otypes=[float])(layer)
-        nu = np.vectorize(self.nu.get, otypes=[float])(layer)
-        return E / (2 * (1 + nu)), E * nu / ((1 + nu) * (1 - 2 * nu))
+        E = np.vectorize(lambda k: self.E_MPa.get(k, np.nan), otypes=[float])(layer)
+        nu = np.vectorize(lambda k: self.nu.get(k, np.nan), otypes=[float])(layer)
+        mu, lam = E / (2 * (1 + nu)), E * nu / ((1 + nu) * (1 - 2 * nu))
+        if fluid.any():
+            if fluid.all():
+                raise InputError("the mesh is all fluid (layer 6); the fluid needs a solid around it")
+            solid = ~fluid & ~np.isin(layer, list(self.rigid))
+            mu[fluid] = 0.0
+            lam[fluid] = FLUID_BULK_RATIO * (lam[solid] + 2 * mu[solid] / 3).max()
+        return mu, lam

@@ -76,6 +76,11 @@ class NeoHookean:
     def __init__(self, model, chunk: int = 4000):
         from skfem import Basis, ElementTetP2, ElementTriP2
 
+        from fem.materials import FLUID_LAYER
+
+        if (model.layer == FLUID_LAYER).any():
+            raise InputError("the large-deformation solver has no fluid core (layer 6); "
+                             "use the linear solver for the solid-fluid models")
         self.model, self.dim, self.chunk = model, model.dim, int(chunk)
         scalar = Basis(model.mesh, ElementTetP2() if self.dim == 3 else ElementTriP2(), intorder=2)
         grads = [scalar.basis[a][0].grad for a in range(scalar.Nbfun)]

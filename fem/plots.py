@@ -401,3 +401,21 @@ def _readable_ticks(axis, nbins: int = 5) -> None:
     fmt = ScalarFormatter(useMathText=True)
     fmt.set_powerlimits((-2, 3))
     axis.set_major_formatter(fmt)
+
+
+def finding_figure(finding) -> Figure:
+    """The curves of a `fem.thesis.Finding`, titled with its thesis section and verdict."""
+    fig = Figure(figsize=(6.4, 4.2))
+    ax = fig.add_subplot()
+    for s in finding.series:
+        ax.plot(s.x, s.y, s.style, label=s.label, markersize=4)
+    if finding.logx:
+        ax.set_xscale("log")
+    ax.set_xlabel(finding.xlabel)
+    ax.set_ylabel(finding.ylabel)
+    ax.set_title(f"{finding.section}: {finding.verdict}", fontsize=10)
+    ax.grid(alpha=0.3)
+    if finding.series:
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    return fig

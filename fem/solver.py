@@ -74,7 +74,7 @@ from skfem.helpers import div, dot
 from common.errors import InputError
 from fem.fields import PointEvaluator, Solution
 from fem.linalg import SaddleFactor
-from fem.materials import Material
+from fem.materials import FLUID_LAYER, Material
 from fem.system import LinearSystem, condense_plan
 
 
@@ -289,20 +289,54 @@ class Model:
         return self.lam + 2.0 * self.mu / self.dim
 
     @cached_property
+    def _fluid_tie(self) -> sp.csr_matrix | None:
+        """(n P1 pressures, n unknown pressures): every P1 pressure of the fluid layer
+        (fem.materials.FLUID_LAYER) tied to one uniform fluid pressure (hydrostatic, as the
+        thesis's fluid elements); None without fluid."""
+        fluid = self.layer == FLUID_LAYER
+        if not fluid.any():
+            return None
+        n = self.pressure_basis.N
+        tied = np.zeros(n, dtype=bool)
+        tied[self.pressure_basis.element_dofs[:, fluid].ravel()] = True
+        col = np.cumsum(~tied) - 1
+        col[tied] = (~tied).sum()
+        return sp.csr_matrix((np.ones(n), (np.arange(n), col)), shape=(n, col.max() + 1))
+
+    def _reduce(self, a):
+        return a if self._fluid_tie is None else self._fluid_tie.T @ a
+
+    @cached_property
     def pressure_compliance(self) -> np.ndarray:
-        """(npressure,) lumped P1 mass weighted by 1 / kappa [mm^3 / MPa]."""
+        """(npressure,) lumped P1 mass weighted by 1 / kappa [mm^3 / MPa]; with a fluid layer its
+        entries are summed into one for the uniform fluid pressure (the last)."""
         nqp = self.basis.X.shape[1]
-        return asm(_lumped_compliance, self.pressure_basis, kappa=np.repeat(self.kappa[:, None], nqp, axis=1))
+        return self._reduce(asm(_lumped_compliance, self.pressure_basis,
+                                kappa=np.repeat(self.kappa[:, None], nqp, axis=1)))
 
     @cached_property
     def _B(self) -> sp.csr_matrix:
-        """(npressure, ndof): int q_i div u."""
-        return asm(_divergence, self.basis, self.pressure_basis).tocsr()
+        """(npressure, ndof): int q_i div u for the pressure unknowns (see pressure_compliance)."""
+        return sp.csr_matrix(self._reduce(asm(_divergence, self.basis, self.pressure_basis)))
 
     @cached_property
     def pressure_operator(self) -> sp.csr_matrix:
-        """(npressure, ndof): nodal pressure (mean-stress-like) p = D^-1 B u [MPa]."""
-        return (sp.diags(1.0 / self.pressure_compliance) @ self._B).tocsr()
+        """(n P1 pressures of pressure_basis, ndof): nodal pressure (mean-stress-like) p = D^-1 B u [MPa]."""
+        p = sp.diags(1.0 / self.pressure_compliance) @ self._B
+        return (p if self._fluid_tie is None else self._fluid_tie @ p).tocsr()
+
+    @property
+    def fluid_pressure_operator(self) -> np.ndarray:
+        """(ndof,) row giving the uniform fluid pressure [MPa] from u (positive: tension)."""
+        if self._fluid_tie is None:
+            raise InputError("this model has no fluid layer (layer 6)")
+        return self._B[-1].toarray().ravel() / self.pressure_compliance[-1]
+
+    def fluid_volume_change(self, u: np.ndarray) -> float:
+        """Linearised volume change of the fluid layer int div u [mm^3; mm^2 in 2D]."""
+        if self._fluid_tie is None:
+            raise InputError("this model has no fluid layer (layer 6)")
+        return float((self._B[-1] @ u)[0])
 
     @cached_property
     def K_dev(self) -> sp.csr_matrix:
@@ -339,8 +373,11 @@ class Model:
     def K(self) -> LinearOperator:
         """(ndof, ndof) stiffness K = K_dev + B^T D^-1 B [N/mm] as an operator (`K @ u`); it is
         never formed (it would be ~7x denser than its factors)."""
+        D = self.pressure_compliance
+
         def apply(u):
-            return self.K_dev @ u + self._B.T @ (self.pressure_operator @ u)
+            Bu = self._B @ u
+            return self.K_dev @ u + self._B.T @ (Bu / (D if u.ndim == 1 else D[:, None]))
         return LinearOperator((self.ndof, self.ndof), matvec=apply, matmat=apply, dtype=float)
 
     # ------------------------------------------------------------------ loads
@@ -418,6 +455,10 @@ class Model:
             vals.append(v)
         rigid = np.isin(self.layer, list(self.material.rigid))
         held = np.unique(self.basis.element_dofs[:, rigid])     # rigid-layer nodes, interfaces too
+        fluid = self.layer == FLUID_LAYER                       # inner fluid nodes: no stiffness, no load
+        if fluid.any():
+            inner = np.setdiff1d(self.basis.element_dofs[:, fluid], self.basis.element_dofs[:, ~fluid])
+            held = np.union1d(held, inner)
         dofs.append(held)
         vals.append(np.zeros(len(held)))
         dofs, vals = np.concatenate(dofs), np.concatenate(vals)
