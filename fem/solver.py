@@ -455,10 +455,7 @@ class Model:
             vals.append(v)
         rigid = np.isin(self.layer, list(self.material.rigid))
         held = np.unique(self.basis.element_dofs[:, rigid])     # rigid-layer nodes, interfaces too
-        fluid = self.layer == FLUID_LAYER                       # inner fluid nodes: no stiffness, no load
-        if fluid.any():
-            inner = np.setdiff1d(self.basis.element_dofs[:, fluid], self.basis.element_dofs[:, ~fluid])
-            held = np.union1d(held, inner)
+        held = np.union1d(held, self._inner_fluid_dofs)
         dofs.append(held)
         vals.append(np.zeros(len(held)))
         dofs, vals = np.concatenate(dofs), np.concatenate(vals)
@@ -471,8 +468,15 @@ class Model:
                              "(overlapping regions); make the regions agree where they meet")
         return dofs[first], vals[first]
 
+    @cached_property
+    def _inner_fluid_dofs(self) -> np.ndarray:
+        """DOFs of fluid nodes off the solid (no stiffness, no load: held, and they hold nothing)."""
+        fluid = self.layer == FLUID_LAYER
+        return np.setdiff1d(self.basis.element_dofs[:, fluid], self.basis.element_dofs[:, ~fluid])
+
     def _check_held(self, fixed):
         """Refuse constraints that leave a rigid-body motion free (a singular system)."""
+        fixed = np.setdiff1d(fixed, self._inner_fluid_dofs)
         n, d = self.mesh.nvertices, self.dim
         t = self.mesh.t
         adj = sp.coo_matrix((np.ones(t.size), (np.repeat(t[0], t.shape[0]), t.T.ravel())), shape=(n, n))
