@@ -296,8 +296,7 @@ class DeflectionExperiment:
 @functools.lru_cache(maxsize=2)
 def worker_experiment(args: tuple) -> DeflectionExperiment:
     """The DeflectionExperiment of `DeflectionExperiment.args`, built once per process."""
-    model_dir, indentor, orientation, position_mm, nu, band_mm, side = args
-    return DeflectionExperiment(model_dir, indentor, orientation, position_mm, nu, band_mm, side)
+    return DeflectionExperiment(*args)
 
 
 def solve_material(item: tuple) -> list:

@@ -26,5 +26,5 @@ def test_refused(spec, nu, text):
 
 
 def test_missing_layer_refused():
-    with pytest.raises(InputError, match=r"layers \[6\]"):
-        Material("m43338").lame(np.array([1, 6]))
+    with pytest.raises(InputError, match=r"layers \[7\]"):
+        Material("m43338").lame(np.array([1, 7]))               # layer 6 is the fluid, needing no modulus
