@@ -558,13 +558,7 @@ def _add_reproduce(sub):
     p.add_argument("--quick", action="store_true", help="coarse meshes (0.25 mm in the top 1 mm instead "
                                                         "of the thesis's 0.125 mm)")
     p.add_argument("--quiet", action="store_true", help="no progress and no summary")
-    p.set_defaults(run=_run_reproduce, check=_check_reproduce)
-
-
-def _check_reproduce(args):
-    from commands.reproduce import check_out
-
-    check_out(args.out, args.quick)
+    p.set_defaults(run=_run_reproduce)
 
 
 def _run_reproduce(args):

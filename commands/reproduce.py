@@ -57,7 +57,7 @@ def run_reproduce(out, quick: bool = False, progress=True) -> str:
         with progress.task(f"claim '{name}'", kind=f"reproduce-{name}-{'quick' if quick else 'full'}"):
             new = claim(shop)
         for f in new:
-            save(finding_figure(f), _png(out, f))
+            save(finding_figure(f), out / "claims" / f"{f.key}.png")
         write_json(path, [f.to_json() for f in new])      # last: the claim counts as done
         findings += new
     atomic_write(out / "index.md", lambda p: Path(p).write_text(markdown_report(findings, quick)))
@@ -68,10 +68,6 @@ def run_reproduce(out, quick: bool = False, progress=True) -> str:
              + (f"; {resumed} claims resumed" if resumed else "")]
     lines += [f"  {f.verdict:10s} {f.section}: {f.title}" for f in findings]
     return "\n".join(lines)
-
-
-def _png(out: Path, finding) -> Path:
-    return out / "claims" / f"{finding.key}.png"
 
 
 def _number(v) -> str:

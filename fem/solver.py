@@ -325,18 +325,21 @@ class Model:
         p = sp.diags(1.0 / self.pressure_compliance) @ self._B
         return (p if self._fluid_tie is None else self._fluid_tie @ p).tocsr()
 
+    @cached_property
+    def _fluid_row(self) -> np.ndarray:
+        """(ndof,) int div u over the fluid layer: the uniform fluid pressure's row of B."""
+        if self._fluid_tie is None:
+            raise InputError("this model has no fluid layer (layer 6)")
+        return self._B[-1].toarray().ravel()
+
     @property
     def fluid_pressure_operator(self) -> np.ndarray:
         """(ndof,) row giving the uniform fluid pressure [MPa] from u (positive: tension)."""
-        if self._fluid_tie is None:
-            raise InputError("this model has no fluid layer (layer 6)")
-        return self._B[-1].toarray().ravel() / self.pressure_compliance[-1]
+        return self._fluid_row / self.pressure_compliance[-1]
 
     def fluid_volume_change(self, u: np.ndarray) -> float:
         """Linearised volume change of the fluid layer int div u [mm^3; mm^2 in 2D]."""
-        if self._fluid_tie is None:
-            raise InputError("this model has no fluid layer (layer 6)")
-        return float((self._B[-1] @ u)[0])
+        return float(self._fluid_row @ u)
 
     @cached_property
     def K_dev(self) -> sp.csr_matrix:

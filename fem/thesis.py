@@ -230,6 +230,8 @@ def cylinder_runs(shop: Workshop) -> CylinderRuns:
     figure 4-22 cylinder 0.76 mm into the held-bone model, and F*/10 (the solid-fluid model is
     about 15x softer: at F* it would go deeper than half its diameter)."""
     from fem.indentors import make_indentor
+    from fem.mesh2d import SOLID_FLUID_SHELL_MM
+    from fem.modelfolder import folder_info
 
     codes = list(CYLINDERS_MM)
     D = np.array([CYLINDERS_MM[c] for c in codes])
@@ -240,8 +242,12 @@ def cylinder_runs(shop: Workshop) -> CylinderRuns:
     f_star = cm_held.indent(make_indentor(f"cylinder:{FIG_4_22_DIAMETER_MM}"),
                             depth_mm=FIG_4_22_DEPTH_MM).total_force_N
     levels = {"F*": f_star, "F*/10": f_star / 10}
-    E_star = 1e-3 / (1 - 0.48**2)                     # m33338 soft tissue, plane strain, MPa
-    R2 = 4.0
+    material = models["solid, bone held"][1].material
+    E_star = material.E_MPa[1] / (1 - material.nu[1] ** 2)             # plane strain, MPa
+    R2 = folder_info(shop.folder("cylinder8_bone"))["params"]["diameter_mm"] / 2
+    R1 = D / 2
+    shape = np.log((R1[-1] / (R1[-1] + R2)) / (R1 / (R1 + R2)))         # Hertz: depth(R1) - depth(C8)
+    core_mm2 = np.pi * (R2 - SOLID_FLUID_SHELL_MM) ** 2
     out, hertz, volume = {}, {}, {}
     for label, (cm, model) in models.items():
         for level, F in levels.items():
@@ -258,11 +264,9 @@ def cylinder_runs(shop: Workshop) -> CylinderRuns:
                     u = cm.compliance(ind.approach).displacement(res.force_N)
                     r["volume_change"].append(abs(model.fluid_volume_change(u)))
             out[(label, level)] = {k: np.array(v) for k, v in r.items()}
-            R1 = D / 2
-            shape = np.log((R1[-1] / (R1[-1] + R2)) / (R1 / (R1 + R2)))     # Hertz: depth(R1) - depth(C8)
             hertz[(label, level)] = F / (np.pi * E_star) * shape
             if label == "solid-fluid":
-                volume[level] = float(np.max(r["volume_change"]) / (np.pi * (R2 - 1.0) ** 2))
+                volume[level] = float(np.max(r["volume_change"]) / core_mm2)
     return CylinderRuns(levels, out, hertz, volume)
 
 
@@ -272,7 +276,11 @@ def _slope(D, depth):
 
 def cylinders(shop: Workshop) -> list[Finding]:
     """Thesis 4.6, figures 4-24 and 4-25 (and the solid-fluid model's volume)."""
-    runs = cylinder_runs(shop)
+    return cylinder_findings(cylinder_runs(shop), shop.size_mm)
+
+
+def cylinder_findings(runs: CylinderRuns, size_mm: float) -> list[Finding]:
+    """Figures 4-24 and 4-25 from `cylinder_runs` on models with `size_mm` surface elements."""
     D = np.array(list(CYLINDERS_MM.values()))
     kappa = 2.0 / D
     R = runs.results
@@ -331,7 +339,7 @@ def cylinders(shop: Workshop) -> list[Finding]:
         "relative fall of contact width C8 -> C1, solid-fluid over solid (F*/10)", None,
         drop(fluid) / drop(held10), REPRODUCED if (narrower and sharper and falls and faster) else DIFFERS,
         f"At F*/10, C1-C8: the solid model's contact is {'no wider than' if narrower else 'not always narrower than'} "
-        f"the solid-fluid model's (widths step with the {shop.size_mm} mm surface nodes), its peak "
+        f"the solid-fluid model's (widths step with the {size_mm} mm surface nodes), its peak "
         f"pressure {'higher for every cylinder' if sharper else 'not always higher'}; the width "
         f"{'falls' if falls else 'does not fall'} from C8 to C1 in both, by {100 * drop(held10):.0f} % "
         f"(solid) and {100 * drop(fluid):.0f} % (solid-fluid).",

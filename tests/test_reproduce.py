@@ -31,10 +31,10 @@ def test_cylinders_follow_plane_strain_hertz_not_a_square_root_law(shop):
     """Thesis 4.6: the solid model's C1 - C8 depth difference is the plane-strain Hertz value
     (measured -4.7 % at F*, -4.1 % at F*/10), a log-log slope near 0.12, not 0.5; the solid-fluid
     model is deeper for every cylinder and keeps its volume (6.7e-11 of the core's area)."""
-    findings = _by_key(thesis.cylinders(shop))
+    runs = thesis.cylinder_runs(shop)
+    findings = _by_key(thesis.cylinder_findings(runs, shop.size_mm))
     depth = findings["fig4-24_depth"]
     assert depth.verdict == thesis.DIFFERS and 0.05 < depth.value < 0.2
-    runs = thesis.cylinder_runs(shop)
     for level in ("F*", "F*/10"):
         fe = runs.results[("solid, bone held", level)]["depth_mm"]
         hertz = runs.hertz[("solid, bone held", level)]
