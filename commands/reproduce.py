@@ -39,6 +39,7 @@ def check_out(out, quick: bool) -> Path:
 def run_reproduce(out, quick: bool = False, progress=True) -> str:
     """Run every claim not yet in `out`, then write the report; returns the summary text."""
     from fem import thesis
+    from fem.findings import REPRODUCED, Finding, Workshop
     from fem.plots import finding_figure, save
 
     out = check_out(out, quick)
@@ -46,12 +47,12 @@ def run_reproduce(out, quick: bool = False, progress=True) -> str:
     out.mkdir(parents=True, exist_ok=True)
     write_json(out / MANIFEST, {"quick": bool(quick), "claims": [name for name, _ in thesis.CLAIMS]})
     (out / "claims").mkdir(exist_ok=True)
-    shop = thesis.Workshop(out / "models", quick, progress)
+    shop = Workshop(out / "models", quick, progress)
     findings, resumed = [], 0
     for name, claim in progress.bar(thesis.CLAIMS, desc="thesis claims", unit="claim"):
         path = out / "claims" / f"{name}.json"
         if path.is_file():
-            findings += [thesis.Finding.from_json(f) for f in json.loads(path.read_text())]
+            findings += [Finding.from_json(f) for f in json.loads(path.read_text())]
             resumed += 1
             continue
         with progress.task(f"claim '{name}'", kind=f"reproduce-{name}-{'quick' if quick else 'full'}"):
@@ -62,7 +63,7 @@ def run_reproduce(out, quick: bool = False, progress=True) -> str:
         findings += new
     atomic_write(out / "index.md", lambda p: Path(p).write_text(markdown_report(findings, quick)))
     atomic_write(out / "index.html", lambda p: Path(p).write_text(html_report(findings, quick)))
-    same = sum(f.verdict == thesis.REPRODUCED for f in findings)
+    same = sum(f.verdict == REPRODUCED for f in findings)
     lines = [f"index.html and index.md in {out}: {len(findings)} findings, {same} reproduced, "
              f"{len(findings) - same} differ (each with its measured reason)"
              + (f"; {resumed} claims resumed" if resumed else "")]

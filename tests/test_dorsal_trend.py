@@ -13,7 +13,7 @@ relative to the section, it holds. The test pins both so that a change to either
 import pytest
 
 import pipeline
-from fem.thesis import dorsal_ratios
+from fem.thesis3d import dorsal_ratios
 
 
 def _dorsal_ratios(tmp_path, preset, depths_mm):

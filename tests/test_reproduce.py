@@ -1,4 +1,4 @@
-"""Thesis claims (fem.thesis) on coarse 2D models, and `pipeline.py reproduce`: report, resume,
+"""Thesis chapter-4 claims (fem.thesis2d) on coarse 2D models, and `pipeline.py reproduce`: report, resume,
 refusals. The dorsal-half claim (3D) is pinned by tests/test_dorsal_trend.py."""
 import json
 
@@ -6,12 +6,13 @@ import numpy as np
 import pytest
 
 import pipeline
-from fem import thesis
+from fem import thesis, thesis2d
+from fem.findings import DIFFERS, REPRODUCED, Workshop
 
 
 @pytest.fixture(scope="module")
 def shop(tmp_path_factory):
-    return thesis.Workshop(tmp_path_factory.mktemp("thesis_models"), quick=True)
+    return Workshop(tmp_path_factory.mktemp("thesis_models"), quick=True)
 
 
 def _by_key(findings):
@@ -20,8 +21,8 @@ def _by_key(findings):
 
 def test_block_with_held_sides_matches_flamant(shop):
     """Thesis 4.1: measured 4.5 % (held) and 17.5 % (free) at r = 3 mm, 60 deg, 0.25 mm mesh."""
-    (f,) = thesis.flamant_block(shop)
-    assert f.verdict == thesis.REPRODUCED and abs(f.value) < 5.0
+    (f,) = thesis2d.flamant_block(shop)
+    assert f.verdict == REPRODUCED and abs(f.value) < 5.0
     rows = {(r["block"], r["r_mm"], r["angle_deg"]): r["fe_over_flamant"] for r in f.table}
     assert abs(rows[("40 x 18 mm, sides free", 3.0, 60)] - 1) > 0.12          # the free-sides block is not
     assert abs(rows[("40 x 18 mm, sides held", 1.0, 0)] - 1) < 0.02            # on the load axis: 0.1 %
@@ -31,10 +32,10 @@ def test_cylinders_follow_plane_strain_hertz_not_a_square_root_law(shop):
     """Thesis 4.6: the solid model's C1 - C8 depth difference is the plane-strain Hertz value
     (measured -4.7 % at F*, -4.1 % at F*/10), a log-log slope near 0.12, not 0.5; the solid-fluid
     model is deeper for every cylinder and keeps its volume (6.7e-11 of the core's area)."""
-    runs = thesis.cylinder_runs(shop)
-    findings = _by_key(thesis.cylinder_findings(runs, shop.size_mm))
+    runs = thesis2d.cylinder_runs(shop)
+    findings = _by_key(thesis2d.cylinder_findings(runs, shop.size_mm))
     depth = findings["fig4-24_depth"]
-    assert depth.verdict == thesis.DIFFERS and 0.05 < depth.value < 0.2
+    assert depth.verdict == DIFFERS and 0.05 < depth.value < 0.2
     for level in ("F*", "F*/10"):
         fe = runs.results[("solid, bone held", level)]["depth_mm"]
         hertz = runs.hertz[("solid, bone held", level)]
@@ -43,26 +44,26 @@ def test_cylinders_follow_plane_strain_hertz_not_a_square_root_law(shop):
     solid = runs.results[("solid, bone held", "F*/10")]["depth_mm"]
     assert np.all(fluid > 5 * solid)
     assert runs.volume["F*/10"] < 1e-9
-    assert findings["fig4-25_contact"].verdict == thesis.REPRODUCED
+    assert findings["fig4-25_contact"].verdict == REPRODUCED
 
 
 def test_line_load_order_of_the_four_models(shop):
     """Thesis 4.7: square, semi-infinite (sides held), cylinder, cylinder with bone."""
-    (f,) = thesis.line_load_order(shop)
-    assert f.verdict == thesis.REPRODUCED
+    (f,) = thesis2d.line_load_order(shop)
+    assert f.verdict == REPRODUCED
     at2 = {r["model"]: r["deflection_2mm"] for r in f.table}
     assert at2["semi-infinite, sides free"] > at2["finite square"]       # free sides would swap them
 
 
 def test_appendices(shop):
-    a, b = thesis.appendices(shop)
-    assert a.verdict == b.verdict == thesis.REPRODUCED
+    a, b = thesis2d.appendices(shop)
+    assert a.verdict == b.verdict == REPRODUCED
     assert a.value < 0.01 and b.value < 1e-6
 
 
 def test_reproduce_writes_a_report_and_resumes(tmp_path, monkeypatch, capsys):
     out = tmp_path / "report"
-    monkeypatch.setattr(thesis, "CLAIMS", (("appendices", thesis.appendices),))
+    monkeypatch.setattr(thesis, "CLAIMS", (("appendices", thesis2d.appendices),))
     assert pipeline.main(["reproduce", "--quick", "--out", str(out), "--quiet"]) == 0
     md, page = (out / "index.md").read_text(), (out / "index.html").read_text()
     for text in (md, page):

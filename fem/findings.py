@@ -1,0 +1,108 @@
+"""What a thesis claim becomes when the project runs it: a `Finding` (the thesis's statement, the
+project's number for it, the difference and a verdict with its measured reason, and the figure's
+`Series`), and the `Workshop` that meshes the models the claims run on (coarse when quick) and
+keeps them for resumed runs.
+
+The claims themselves are in fem.thesis2d (chapter 4 and the appendices: plane-strain models)
+and fem.thesis3d (chapters 5-7: the 3D presets and their sections); fem.thesis lists them.
+Units: mm, N (N/mm on the 2D models), MPa.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+from fem.materials import Material
+
+REPRODUCED, DIFFERS = "reproduced", "differs"
+
+@dataclass
+class Series:
+    """One curve of a finding's figure."""
+    label: str
+    x: list
+    y: list
+    style: str = "-o"
+
+
+@dataclass
+class Finding:
+    """A thesis statement against the project's measurement.
+
+    key: file-name-safe id; section: thesis section and figure; thesis: the statement (number or
+    trend); quantity: what `value` and `thesis_value` are (with unit); verdict: REPRODUCED or
+    DIFFERS; reason: the measured explanation; series / xlabel / ylabel / logx: the figure;
+    table: rows of the numbers behind it."""
+    key: str
+    section: str
+    title: str
+    thesis: str
+    quantity: str
+    thesis_value: float | None
+    value: float | None
+    verdict: str
+    reason: str
+    xlabel: str = ""
+    ylabel: str = ""
+    series: list = field(default_factory=list)
+    table: list = field(default_factory=list)
+    logx: bool = False
+
+    @property
+    def relative_difference(self) -> float | None:
+        """(value - thesis_value) / |thesis_value|; None without both numbers."""
+        if self.value is None or not self.thesis_value:
+            return None
+        return (self.value - self.thesis_value) / abs(self.thesis_value)
+
+    def to_json(self) -> dict:
+        return asdict(self)
+
+    @classmethod
+    def from_json(cls, data: dict) -> Finding:
+        data = dict(data)
+        data["series"] = [Series(**s) for s in data.get("series", [])]
+        return cls(**data)
+
+
+class Workshop:
+    """Model folders of the 2D thesis models under `root`, meshed on first use (0.25 mm elements
+    in the top 1 mm when quick, else the thesis's 0.125 mm) and kept for resumed runs."""
+
+    MODELS = {"block": ("block", {}), "square": ("square", {}), "cylinder8": ("cylinder8", {}),
+              "cylinder8_bone": ("cylinder8", {"bone": True}),
+              "cylinder8_fluid": ("cylinder8", {"solid_fluid": True})}
+
+    def __init__(self, root, quick: bool, progress=None):
+        from common.progress import as_progress
+
+        self.root, self.quick, self.progress = Path(root), bool(quick), as_progress(progress)
+
+    @property
+    def size_mm(self) -> float:
+        return 0.25 if self.quick else 0.125
+
+    def sizing(self):
+        from fem.mesh2d import Sizing2D
+
+        return Sizing2D(size_mm=self.size_mm)
+
+    def folder(self, name: str, domain=None) -> Path:
+        """Model folder `name` (one of MODELS, or any name with its `domain`), meshed if absent."""
+        from fem import mesh2d
+
+        out = self.root / name
+        if not (out / "model.json").is_file():
+            if domain is None:
+                preset, kw = self.MODELS[name]
+                domain = mesh2d.preset_domain(preset, **kw)
+            mesh2d.run_mesh2d(out, domain, self.sizing(), progress=self.progress)
+        return out
+
+    def contact_model(self, name: str, material="m33338", rigid_bone: bool = False):
+        """(fem.contact.ContactModel, Model) of model folder `name`, factorised."""
+        from fem.contact import ContactModel
+        from fem.modelfolder import CONTACT_REGION, factorise, read_model
+
+        model, info = read_model(self.folder(name), material=Material(material, rigid_bone=rigid_bone))
+        return ContactModel.from_fe(model, factorise(model, info), CONTACT_REGION[model.dim]), model
