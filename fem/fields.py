@@ -47,6 +47,8 @@ class PointEvaluator:
         pool = np.arange(m.mesh.nelements) if layer is None else np.flatnonzero(m.layer == layer)
         if len(pool) == 0:
             raise InputError(f"no elements in layer {layer}; the mesh has layers {sorted(set(m.layer))}")
+        if len(x) == 0:
+            return np.zeros(0, dtype=np.int64)
         centroids = m.mesh.p[:, m.mesh.t[:, pool]].mean(axis=1).T
         _, idx = cKDTree(centroids).query(x, k=min(16, len(pool)))
         cand = pool[np.asarray(idx).reshape(len(x), -1)]

@@ -66,8 +66,9 @@ class Finding:
 
 
 class Workshop:
-    """Model folders of the 2D thesis models under `root`, meshed on first use (0.25 mm elements
-    in the top 1 mm when quick, else the thesis's 0.125 mm) and kept for resumed runs."""
+    """Model folders under `root`, meshed on first use and kept for resumed runs: the 2D thesis
+    models (0.25 mm elements in the top 1 mm when quick, else the thesis's 0.125 mm) and the 3D
+    presets (1 mm volar elements when quick, else 0.5 mm, the thesis's surface element size)."""
 
     MODELS = {"block": ("block", {}), "square": ("square", {}), "cylinder8": ("cylinder8", {}),
               "cylinder8_bone": ("cylinder8", {"bone": True}),
@@ -97,6 +98,19 @@ class Workshop:
                 preset, kw = self.MODELS[name]
                 domain = mesh2d.preset_domain(preset, **kw)
             mesh2d.run_mesh2d(out, domain, self.sizing(), progress=self.progress)
+        return out
+
+    def preset(self, preset: str, size_mm: float | None = None) -> Path:
+        """3D model folder of a preset ('human' or 'monkey') with `size_mm` volar elements
+        (default: 1.0 mm when quick, else 0.5 mm), meshed if absent."""
+        from fem.mesh import Sizing, run_mesh
+        from fem.model import model_from_args, params_for
+
+        size = (1.0 if self.quick else 0.5) if size_mm is None else float(size_mm)
+        out = self.root / (f"{preset}_3d" if size == 1.0 else f"{preset}_3d_{size:g}mm")
+        if not (out / "model.json").is_file():
+            run_mesh(out, model_from_args(None, preset, params_for(preset)), Sizing(size_mm=size),
+                     progress=self.progress)
         return out
 
     def contact_model(self, name: str, material="m33338", rigid_bone: bool = False):

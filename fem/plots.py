@@ -404,7 +404,7 @@ def _readable_ticks(axis, nbins: int = 5) -> None:
 
 
 def finding_figure(finding) -> Figure:
-    """The curves of a `fem.thesis.Finding`, titled with its thesis section and verdict."""
+    """The curves of a `fem.findings.Finding`, titled with its thesis section and verdict."""
     fig = Figure(figsize=(6.4, 4.2))
     ax = fig.add_subplot()
     for s in finding.series:

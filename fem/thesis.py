@@ -5,11 +5,13 @@ fem.thesis2d holds chapter 4 and the appendices, fem.thesis3d chapters 5-7.
 from __future__ import annotations
 
 from fem.thesis2d import appendices, cylinders, flamant_block, line_load_order
-from fem.thesis3d import dorsal_half, layer_effects
+from fem.thesis3d import bars_3d, contact_vs_diameter, dorsal_half, layer_effects, sections_2d_3d, steps_3d
 
 #: (name, function, what it needs) in thesis order; `pipeline.py reproduce` runs them all.
 CLAIMS = (("flamant", flamant_block), ("cylinders", cylinders), ("line_load", line_load_order),
-          ("dorsal", dorsal_half), ("layers", layer_effects), ("appendices", appendices))
+          ("contact_3d", contact_vs_diameter), ("dorsal", dorsal_half), ("layers", layer_effects),
+          ("bars_3d", bars_3d), ("steps_3d", steps_3d), ("sections_2d_3d", sections_2d_3d),
+          ("appendices", appendices))
 
 #: Thesis figures with no run here, and why.
 NOT_RUN = (
@@ -17,8 +19,15 @@ NOT_RUN = (
      "(Srinivasan and LaMotte 1991) are printed as curves only."),
     ("4.7, figure 4-27 (data points)", "The monkey wedge data (Srinivasan 1989) are printed as points "
      "on a curve only; the model profiles are compared above."),
-    ("5.2, figures 5-14 and 6-30", "Contact area against indentor diameter on the 3D human fingertip: "
-     "the 3D cylinder series (`pipeline.py biomech cylinder-series`) is not part of this report yet."),
-    ("6.3", "3D receptive-field maps over the pad: not part of this report yet."),
-    ("7.1, figures 7-1 to 7-4", "2D section against 3D model comparison: not part of this report yet."),
+    ("6.2.2, 6.2.3, figures 6-15 to 6-23", "Surface profiles and forces of human fingertips in vivo "
+     "under cylinders and flat indentors: the recordings are printed as curves only (`pipeline.py "
+     "fit-material` fits a model to recorded profiles and forces)."),
+    ("6.3.3, figures 6-31 to 6-38", "Surface, pressure and strain-energy maps under steps 1, 3 and 5 "
+     "at chosen positions: pictures without numbers to compare; the step-5 sweep's contact area "
+     "and peak pressure are compared above. `pipeline.py indent` with a step sweep and receptors "
+     "writes the population response maps."),
+    ("6.3.1, figures 6-26 to 6-28; 6.3.2, figure 6-29; 6.3.3, figure 6-40", "Predicted against recorded "
+     "SA discharge under bars, cylinders and steps (Phillips and Johnson 1981, Srinivasan and LaMotte "
+     "1987, 1991): the recordings are printed as curves only (`pipeline.py analyze` fits the receptor "
+     "model to recorded rates)."),
 )
