@@ -4,17 +4,24 @@ fem.thesis2d holds chapter 4 and the appendices, fem.thesis3d chapters 5-7.
 """
 from __future__ import annotations
 
-from fem.thesis2d import appendices, cylinders, flamant_block, line_load_order
+from fem.thesis2d import (aperiodic_gratings, appendices, cylinders, flamant_block, gap_detection, line_load_order,
+                          point_load_fields, rectangular_bars, two_point_resolution)
 from fem.thesis3d import bars_3d, contact_vs_diameter, dorsal_half, layer_effects, sections_2d_3d, steps_3d
 
 #: (name, function, what it needs) in thesis order; `pipeline.py reproduce` runs them all.
-CLAIMS = (("flamant", flamant_block), ("cylinders", cylinders), ("line_load", line_load_order),
+CLAIMS = (("flamant", flamant_block), ("receptive_fields", point_load_fields), ("two_point", two_point_resolution),
+          ("bars", rectangular_bars), ("gratings", aperiodic_gratings), ("gaps", gap_detection),
+          ("cylinders", cylinders), ("line_load", line_load_order),
           ("contact_3d", contact_vs_diameter), ("dorsal", dorsal_half), ("layers", layer_effects),
           ("bars_3d", bars_3d), ("steps_3d", steps_3d), ("sections_2d_3d", sections_2d_3d),
           ("appendices", appendices))
 
 #: Thesis figures with no run here, and why.
 NOT_RUN = (
+    ("4.5.2-4.5.3, figures 4-8, 4-11, 4-13 to 4-17, tables 4.1-4.4", "Recorded SA responses to "
+     "gratings and the fits of each strain measure to them (Phillips and Johnson 1981): printed as "
+     "curves only; the model-side statements are compared above."),
+    ("4.5.5, figure 4-20", "Human gap-detection thresholds (d'): printed as curves only."),
     ("4.6, figure 4-26", "Predicted against recorded SA discharge under cylinders: the recordings "
      "(Srinivasan and LaMotte 1991) are printed as curves only."),
     ("4.7, figure 4-27 (data points)", "The monkey wedge data (Srinivasan 1989) are printed as points "

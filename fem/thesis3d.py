@@ -406,19 +406,6 @@ def contact_vs_diameter(shop: Workshop) -> list[Finding]:
                **{f"area_{d:g}mm_mm2": float(human.contact_area_mm2[k, i]) for k, d in enumerate(human_depths)}}
               for i, c in enumerate(human.codes)]
     return [Finding(
-        "fig6-30_contact", "6.3.2, figure 6-30", "Contact radius and peak pressure against cylinder radius (3D monkey)",
-        "Indented to a prescribed force, a larger cylinder makes a larger contact (radius of the "
-        "circle of equal area) and a lower peak contact pressure.",
-        "rank correlation of contact radius with cylinder radius, C1-C8", 1.0, r_up,
-        REPRODUCED if r_up >= 0.9 and p_down <= -0.9 else DIFFERS,
-        f"At {1e3 * force:.2f} mN (C4 1 mm deep, m43338, across the pad): contact radius "
-        f"{radius[0]:.2f} mm (C1) to {radius[-1]:.2f} mm (C8), rank correlation {r_up:+.2f}; peak pressure "
-        f"{1e3 * pressure[0]:.2f} to {1e3 * pressure[-1]:.2f} kPa, rank correlation {p_down:+.2f}. The "
-        f"thesis's force is not stated; the trends hold at any force of a linear model up to the "
-        f"contact's growth.", "cylinder radius [mm]", "equivalent contact radius [mm]",
-        [Series("contact radius", R.tolist(), radius.tolist()),
-         Series("peak pressure [kPa]", R.tolist(), (1e3 * pressure).tolist(), "--s")], rows_m, logx=True),
-        Finding(
         "fig5-14_area", "5.2, figure 5-14", "Contact area against cylinder diameter at fixed depths (3D human)",
         "In vivo (one subject, curves only): at a fixed depth the contact area grows with the "
         "cylinder's diameter, linearly for the smaller depths.",
@@ -429,7 +416,19 @@ def contact_vs_diameter(shop: Workshop) -> list[Finding]:
         + " (judged linear below 10 %). The recorded areas are printed as curves only; the model's "
         "trend is compared.", "cylinder diameter [mm]", "contact area [mm^2]",
         [Series(f"{d:g} mm deep", D.tolist(), human.contact_area_mm2[k].tolist()) for k, d in enumerate(human_depths)],
-        rows_h)]
+        rows_h),
+        Finding(
+        "fig6-30_contact", "6.3.2, figure 6-30", "Contact radius and peak pressure against cylinder radius (3D monkey)",
+        "Indented to a prescribed force, a larger cylinder makes a larger contact (radius of the "
+        "circle of equal area) and a lower peak contact pressure.",
+        "rank correlation of contact radius with cylinder radius, C1-C8", 1.0, r_up,
+        REPRODUCED if r_up >= 0.9 and p_down <= -0.9 else DIFFERS,
+        f"At {1e3 * force:.2f} mN (C4 1 mm deep, m43338, across the pad): contact radius "
+        f"{radius[0]:.2f} mm (C1) to {radius[-1]:.2f} mm (C8), rank correlation {r_up:+.2f}; peak pressure "
+        f"{1e3 * pressure[0]:.2f} to {1e3 * pressure[-1]:.2f} kPa, rank correlation {p_down:+.2f}. The "
+        f"thesis does not state its force.", "cylinder radius [mm]", "equivalent contact radius [mm]",
+        [Series("contact radius", R.tolist(), radius.tolist()),
+         Series("peak pressure [kPa]", R.tolist(), (1e3 * pressure).tolist(), "--s")], rows_m, logx=True)]
 
 
 # ----------------------------------------------------------------------------- 6.3.3: step shapes

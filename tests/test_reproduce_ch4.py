@@ -1,0 +1,126 @@
+"""Thesis 4.2-4.5 claims (fem.thesis2d: point load, two points, bars, gratings, gaps) on the coarse
+2D models of a quick Workshop (0.25 mm elements). The numbers in the docstrings were measured on
+them; where the 0.125 mm models give another verdict it is said."""
+import numpy as np
+import pytest
+
+from fem import thesis2d
+from fem.findings import DIFFERS, REPRODUCED, Workshop
+
+
+@pytest.fixture(scope="module")
+def shop(tmp_path_factory):
+    return Workshop(tmp_path_factory.mktemp("thesis_ch4_models"), quick=True)
+
+
+def _by_key(findings):
+    return {f.key: f for f in findings}
+
+
+def test_point_load_profiles_and_receptive_fields(shop):
+    """Thesis 4.2. Half-peak widths at 0.5, 0.75, 1.0 mm: SED 0.62, 0.99, 1.36 mm, max compressive
+    strain 1.04, 1.53, 2.04, |shear strain| 1.59, 2.39, 3.20 (0.125 mm: 0.67, 1.03, 1.37 for SED).
+    The four models spread by at most 0.76 of the widening per 0.25 mm of depth. Swept load: SED
+    disk 0.85 mm, compressive disk 1.27 mm, shear annulus 1.81 mm with a 0.25 mm hole (0.125 mm:
+    0.27; thesis about 0.3). The profile under one load overstates the cylinders' fields by 17-45 %
+    and matches the flat models within 4 %."""
+    f = _by_key(thesis2d.point_load_fields(shop))
+    depth = f["fig4-3_depth"]
+    assert depth.verdict == REPRODUCED and 0.55 < depth.value < 0.75
+    width = {(r["measure"], r["depth_mm"]): r["half_peak_width_mm"] for r in depth.table}
+    assert width["SED", 0.75] == pytest.approx(1.0, abs=0.1)             # 0.99 here, 1.03 on 0.125 mm
+
+    assert f["fig4-3_models"].verdict == REPRODUCED and f["fig4-3_models"].value < 0.9
+
+    fields = f["fig4-4_receptive_fields"]
+    assert fields.verdict == REPRODUCED and fields.value == pytest.approx(0.3, abs=0.07)
+    half = {r["measure"]: r for r in fields.table if r["threshold_of_peak"] == 0.5}
+    assert half["SED"]["shape"] == half["max compressive strain"]["shape"] == "disk"
+    assert half["SED"]["diameter_mm"] < half["max compressive strain"]["diameter_mm"] < half["|shear strain|"]["diameter_mm"]
+    holes = [r["hole_mm"] for r in fields.table if r["measure"] == "|shear strain|"]
+    assert holes == sorted(holes) and holes[0] < 0.15 and holes[-1] > 0.35  # 0.09-0.42: set by the threshold
+
+    swap = f["sec4-2_reciprocity"]
+    assert swap.verdict == DIFFERS and 0.25 < swap.value < 0.4                # 0.32 on the cylinder with bone
+    rel = {(r["model"], r["measure"]): r["relative_difference"] for r in swap.table}
+    assert all(abs(v) < 0.05 for (m, _), v in rel.items() if m in ("finite square", "semi-infinite (sides held)"))
+
+
+def test_two_point_cues(shop):
+    """Thesis 4.3. Equal displacement: 1.16 of one load's peak SED at 0.2 mm, down to 0.68 at
+    1.2 mm, up again to 0.78 at 3 mm; equal force falls monotonically. The equal-force cue settles
+    (5 %) at 2.2 mm here, 1.6 mm (the thesis's value, reproduced) on the 0.125 mm models: one tip
+    alone jitters by 7.4 % between neighbouring places on 0.25 mm elements (2.7 % on 0.125 mm).
+    Equal displacement settles later (2.8 mm)."""
+    shapes, cue = thesis2d.two_point_resolution(shop)
+    assert shapes.verdict == REPRODUCED and shapes.value == pytest.approx(1.16, abs=0.05)
+    rows = shapes.table
+    assert rows[0]["equal_force_MPa"] == pytest.approx(rows[0]["equal_displacement_MPa"], rel=1e-6)
+    assert cue.verdict == DIFFERS and cue.thesis_value == 1.6
+    assert 1.6 < cue.value <= 2.4
+    alone = np.array([r["one_tip_alone_force_MPa"] for r in rows[1:]])
+    assert np.max(np.abs(np.diff(alone)) / alone[:-1]) > 0.05             # the jitter beyond the band
+    disp = np.array([r["equal_displacement_MPa"] for r in rows])
+    at = [r["separation_mm"] for r in rows].index(1.6)
+    assert abs(disp[at] / disp[-1] - 1) > 0.05                             # still changing at 1.6 mm
+
+
+def test_bar_on_the_four_models(shop):
+    """Thesis 4.4. Edge over centre pressure 1.87, 1.78, 1.43, 1.44 (square, block, cylinder,
+    cylinder with bone; 0.125 mm: 2.47-1.95). SED contrast 0.080 (square) against 0.186 (block,
+    0.169 with free sides): the square is not the best, differs. |shear strain| contrast 0.96-1.0
+    against at most 0.19. The bone: peak SED x 2.14, force x 1.34."""
+    f = _by_key(thesis2d.rectangular_bars(shop))
+    assert f["fig4-7_edge_pressure"].verdict == REPRODUCED and 1.3 < f["fig4-7_edge_pressure"].value < 2.0
+    rows = {r["model"]: r for r in f["fig4-7_edge_pressure"].table}
+    assert f["fig4-7_model_contrast"].verdict == DIFFERS and f["fig4-7_model_contrast"].value < 0.7
+    for block in ("semi-infinite (sides held)", "semi-infinite, sides free"):
+        assert rows[block]["SED contrast"] > 1.3 * rows["finite square"]["SED contrast"]   # 2.3, 2.1 here; 1.7, 1.5 on 0.125 mm
+    assert f["fig4-7_shear_edges"].verdict == REPRODUCED and f["fig4-7_shear_edges"].value > 0.9
+    bone = f["fig4-7_bone"]
+    assert bone.verdict == REPRODUCED and bone.value == pytest.approx(2.15, abs=0.1)     # 2.19 on 0.125 mm
+    cyl, held = rows["cylinder"], rows["cylinder with bone (held)"]
+    assert held["force_N_per_mm"] / cyl["force_N_per_mm"] == pytest.approx(1.34, abs=0.03)
+
+
+def test_gratings_on_cylinders_and_block(shop):
+    """Thesis 4.5.2-4.5.4 with the 0.5 mm-bar grating. Bars touching: 1-4 on the 8 mm cylinder,
+    1-5 on the 16 mm one, all 8 on the block. SED under each bar over the rightmost's (8 mm): 0.737,
+    0.528, 0.635, 0.814, 0.954, 0.999, 1.000, 1.000. Two rightmost bars on the 16 mm model 1.1 %
+    apart (differs: the 5 mm last gap). Off-centre profiles 0.152, 0.342 (8 mm), 0.049, 0.054
+    (block). Central profiles cylinder against block 0.267, population responses 0.188 (differs)."""
+    runs = thesis2d.grating_runs(shop)
+    f = _by_key(thesis2d.grating_findings(runs))
+    l8, l16, block = (label for _, label, _ in thesis2d.GRATING_MODELS)
+    assert runs[l8]["touching"].max() == 4 and runs[l16]["touching"].max() == 5
+    assert np.all(runs[block]["touching"] == 8)
+    assert np.allclose(runs[l8]["force"], runs[l8]["bar_force"].sum(axis=1))
+    assert f["fig4-10_bars_in_contact"].verdict == REPRODUCED
+
+    ratio = [r[f"SED {l8}"] for r in f["fig4-11_neighbours"].table]          # bars from the left
+    assert f["fig4-11_neighbours"].verdict == REPRODUCED
+    np.testing.assert_allclose(ratio, [0.737, 0.528, 0.635, 0.814, 0.954, 0.999, 1.0, 1.0], atol=0.03)
+
+    assert f["fig4-12_diameter"].verdict == REPRODUCED and f["fig4-12_diameter"].value > 1.1
+    assert f["sec4-5-3_rightmost_bars"].verdict == DIFFERS and f["sec4-5-3_rightmost_bars"].value < 3.0
+
+    off = f["fig4-18_off_centre"]
+    assert off.verdict == REPRODUCED and off.value == pytest.approx(0.34, abs=0.05)
+    rms = {(r["model"], r["receptor_off_centre_mm"]): r["rms_difference"] for r in off.table}
+    assert rms[block, 2.0] < 0.1 < rms[l8, 1.0]                              # 0.054 against 0.152
+
+    central = f["sec4-5-4_central_profiles"]
+    assert central.verdict == DIFFERS and 0.2 < central.value < 0.35
+    share = runs[block]["bar_force"][0] / runs[block]["force"][0]
+    assert share[-1] > share[1:-1].max()                                      # the end bars carry the most
+
+
+def test_gap_peaks(shop):
+    """Thesis 4.5.5, two 2 mm bars. Inter-peak distance 0.63, 0.81, 0.92, 1.07, 1.60, 2.09, 3.18 mm
+    for gaps 0.25-3 mm (0.125 mm: 0.71, 0.79, 0.90, 1.06, 1.49, 1.94, 3.07): within 6.6 % of the
+    gap from 1 mm up, levelling off near the receptor depth below."""
+    (f,) = thesis2d.gap_detection(shop)
+    assert f.verdict == REPRODUCED and f.value == pytest.approx(0.67, abs=0.08)
+    dist = {r["gap_mm"]: r["interpeak_mm"] for r in f.table}
+    assert dist[0.5] - dist[0.25] < 0.25                                   # 0.18 mm for 0.25 mm more gap
+    assert dist[3.0] - dist[1.0] == pytest.approx(2.0, abs=0.2)            # slope 1 above it
