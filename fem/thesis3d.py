@@ -320,8 +320,11 @@ def sections_2d_3d(shop: Workshop) -> list[Finding]:
             for k in ("2D", "3D", "off")]
     labels = {"2D": "2D section (plane strain)", "3D": f"3D, section z = {z0:.2f} mm", "off": f"3D, z = {z1:.2f} mm"}
     style = {"2D": "--", "3D": "-", "off": ":"}
-    force = (f"Line force through the section: 3D {f3:.2e} N/mm (contact forces within 0.75 mm of "
-             f"it), plane strain {f2:.2e} N/mm")
+    nu = float(run.model.material.nu[1])
+    plane = 1.0 / (1.0 - nu**2)          # plane strain: modulus E / (1 - nu^2) against E
+    force = (f"The two sections carry {f3:.2e} (3D, contact forces within 0.75 mm of it) and {f2:.2e} "
+             f"N/mm (plane strain): {100 * (f3 / f2 - 1):+.0f} %. Under the same load, plane strain's "
+             f"modulus E / (1 - nu^2) lowers strains by 1 / {plane:.2f} at nu = {nu:g}")
     return [Finding(
         "fig7-2_eps1", "7.1.1, figure 7-2", "Maximum compressive strain, 2D section against 3D",
         "Under the same bar at the same depth, the maximum compressive strain 0.75 mm deep is about "
@@ -331,9 +334,9 @@ def sections_2d_3d(shop: Workshop) -> list[Finding]:
         REPRODUCED if form > 0.95 and 1.0 <= eps_ratio <= 1.15 else DIFFERS,
         f"3D / 2D peak {eps_ratio:.2f} (judged 'slightly higher' up to 1.15); correlation of the "
         f"two profiles {form:.3f} (same form). The 2D model here is the section of the 3D model itself "
-        f"(the thesis used its round cylinder), so geometry and material are the same. {force}: the 3D "
-        f"section carries {100 * (f3 / f2 - 1):+.0f} % of the plane-strain load per mm, so at equal "
-        f"depth it is the more strained; see the SED finding.",
+        f"(the thesis used its round cylinder), so geometry and material are the same. {force}; "
+        f"the measured 3D / 2D ratio {eps_ratio:.2f} is that factor times the load ratio "
+        f"{f3 / f2:.2f} within {100 * abs(eps_ratio / (plane * f3 / f2) - 1):.0f} %.",
         "x across the pad [mm]", "max compressive strain at 0.75 mm",
         [Series(labels[k], x.tolist(), eps[k].tolist(), style[k]) for k in eps], rows),
         Finding(
@@ -342,12 +345,11 @@ def sections_2d_3d(shop: Workshop) -> list[Finding]:
         "gives the higher strain energy density 0.75 mm deep.",
         "peak SED at 0.75 mm, 2D over 3D", None, sed_ratio, REPRODUCED if sed_ratio > 1 else DIFFERS,
         f"2D / 3D peak {sed_ratio:.2f}: the 3D section {'is' if sed_ratio < 1 else 'is not'} the more "
-        f"strained. {force}: the 3D section carries {'more' if f3 > f2 else 'less'} load per mm, so "
-        f"at equal depth the 3D pad is {'stiffer' if f3 > f2 else 'softer'} along its section "
-        f"than the plane-strain one: the thesis's premise that the 2D model is the stiffer one does "
-        f"not hold for this model. Not separated here: the preset is a 7.5 mm pad held at its "
-        f"proximal core and along its nail, shorter than the thesis's phalanx, and these ends "
-        f"stiffen it along its axis.",
+        f"strained. {force}. At equal depth the two sections here take about the same load, so the "
+        f"stiffer plane-strain section strains less and stores less energy: 3D / 2D SED "
+        f"{1 / sed_ratio:.2f}. The thesis's premise, that the stiffer 2D model needs more load for "
+        f"the same depth and so stores more energy, does not hold for this model, whose pad is "
+        f"held along its nail and at its proximal core over its 7.5 mm length.",
         "x across the pad [mm]", "SED at 0.75 mm [MPa]",
         [Series(labels[k], x.tolist(), sed[k].tolist(), style[k]) for k in sed], rows),
         Finding(
