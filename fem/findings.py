@@ -70,9 +70,13 @@ class Workshop:
     models (0.25 mm elements in the top 1 mm when quick, else the thesis's 0.125 mm) and the 3D
     presets (1 mm volar elements when quick, else 0.5 mm, the thesis's surface element size)."""
 
-    MODELS = {"block": ("block", {}), "square": ("square", {}), "cylinder8": ("cylinder8", {}),
-              "cylinder8_bone": ("cylinder8", {"bone": True}),
-              "cylinder8_fluid": ("cylinder8", {"solid_fluid": True})}
+    #: name -> (fem.mesh2d domain function, its arguments): the models claims ask for by name
+    MODELS = {"block": ("preset_domain", ("block",), {}), "square": ("preset_domain", ("square",), {}),
+              "cylinder8": ("preset_domain", ("cylinder8",), {}),
+              "cylinder8_bone": ("preset_domain", ("cylinder8",), {"bone": True}),
+              "cylinder8_fluid": ("preset_domain", ("cylinder8",), {"solid_fluid": True}),
+              "cylinder16_bone": ("preset_domain", ("cylinder16",), {"bone": True}),
+              "block_free": ("rectangle_domain", ("block_free", 40.0, 18.0), {"held_sides": False})}
 
     def __init__(self, root, quick: bool, progress=None):
         from common.progress import as_progress
@@ -95,8 +99,8 @@ class Workshop:
         out = self.root / name
         if not (out / "model.json").is_file():
             if domain is None:
-                preset, kw = self.MODELS[name]
-                domain = mesh2d.preset_domain(preset, **kw)
+                build, args, kw = self.MODELS[name]
+                domain = getattr(mesh2d, build)(*args, **kw)
             mesh2d.run_mesh2d(out, domain, self.sizing(), progress=self.progress)
         return out
 

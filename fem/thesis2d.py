@@ -78,12 +78,10 @@ def line_load_order(shop: Workshop) -> list[Finding]:
     """Thesis 4.7, figure 4-27: deflection 2 mm from a 1 mm line load orders the four models'
     stiffness: finite square, semi-infinite, cylinder, cylinder with bone. Also the block with free
     sides and the cylinder with a free (elastic) bone."""
-    from fem import mesh2d
     from fem.biomech import DeflectionExperiment
 
     runs = list(LINE_LOAD_MODELS) + [("block_free", "semi-infinite, sides free", {}),
                                      ("cylinder8_bone", "cylinder with bone (free)", {})]
-    shop.folder("block_free", mesh2d.rectangle_domain("block_free", 40.0, 18.0, held_sides=False))
     rows, series, at2 = [], [], {}
     d = np.linspace(0.0, 3.9, 40)                  # the square's surface ends 4 mm from the load
     for name, label, kw in runs:
@@ -512,10 +510,8 @@ def rectangular_bars(shop: Workshop) -> list[Finding]:
     """Thesis 4.4, figure 4-7: a 1.5 mm bar 1 mm deep on the four models (and the block with free
     sides): surface pressure, and SED, max compressive strain and |shear strain| at 0.75 mm.
     Contrast: (peak - centre) / (peak + centre) of a profile across the receptors."""
-    from fem import mesh2d
     from fem.indentors import make_indentor
 
-    shop.folder("block_free", mesh2d.rectangle_domain("block_free", 40.0, 18.0, held_sides=False))
     free = "semi-infinite, sides free"
     names = [c for c, _ in CANDIDATES]
     label_of = dict(CANDIDATES)
@@ -631,10 +627,8 @@ def grating_runs(shop: Workshop) -> dict:
     not list its gaps) indented 1 mm and stepped across each of GRATING_MODELS: SED and max
     compressive strain at 0.75 mm under every position, the bars touching, the force on each bar.
     Returns {"positions_mm", "edges_mm", "gaps_mm", label: {...}}."""
-    from fem import mesh2d
     from fem.indentors import make_indentor
 
-    shop.folder("cylinder16_bone", mesh2d.preset_domain("cylinder16", bone=True))
     grating = make_indentor(f"grating:{GRATING_BAR_MM:g}", orientation="parallel")
     edges = grating.parts[0].bar_edges_mm()
     # the grating's left end relative to the receptor at x = 0, in 0.25 mm steps (the thesis's 0.2 mm)

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fem.findings import DIFFERS, REPRODUCED, Finding, Series, Workshop
+from fem.thesis2d import BAR_WIDTH_MM
 
 
 # ----------------------------------------------------------------------------- 6.2.1: dorsal half
@@ -22,7 +23,7 @@ def dorsal_ratios(model_dir, preset: str, depths_mm) -> list[tuple[float, float,
     from fem.model import model_from_args, params_for
     from fem.modelfolder import open_model
 
-    model, system, region, info = open_model(model_dir)
+    model, system, region, _ = open_model(model_dir)
     cm = ContactModel.from_fe(model, system, region)
     z = cm.points_mm[:, 2]
     wedge = make_indentor("wedge", orientation="perpendicular", position_mm=(0.0, 0.5 * (z.min() + z.max())))
@@ -136,7 +137,8 @@ class Indentation3D:
 
 def indent_3d(folder, material: str, indentor: str, depth_mm: float, **place) -> Indentation3D:
     """`indentor` (a fem.indentors code) `depth_mm` beyond first touch into a 3D model folder with
-    `material`, placed by `place` (fem.indentors.place; default approach: the folder's support);
+    `material`, placed by `place` (fem.indentors.place; default approach: the folder's support,
+    default position: x = 0 at the middle of the pad);
     only the candidates it can reach are condensed."""
     from fem.contact import ContactModel, reach
     from fem.indentors import make_indentor
@@ -145,6 +147,7 @@ def indent_3d(folder, material: str, indentor: str, depth_mm: float, **place) ->
     model, info = read_model(folder, material=material)
     sn = model.surface_nodes(CONTACT_REGION[3])
     place.setdefault("approach", list(approach_down(info)))
+    place.setdefault("position_mm", (0.0, 0.5 * (sn.x[:, 2].min() + sn.x[:, 2].max())))   # middle of the pad
     ind = make_indentor(indentor, **place)
     near = reach(sn.x, ind, np.zeros((1, 3)), depth_mm)
     cm = ContactModel.from_fe(model, factorise(model, info, sn.nodes[near]), CONTACT_REGION[3])
@@ -197,8 +200,8 @@ def _section_cells(shop: Workshop, name: str, section):
     return ((a + b + c) / 3).T, area
 
 
-BAR_MM, BAR_DEPTH_MM = 1.5, 1.0
-"""Thesis 6.3.1 and 7.1: the 1.5 mm bar along the finger axis, 1 mm beyond first touch."""
+BAR_DEPTH_MM = 1.0
+"""Thesis 6.3.1 and 7.1: the bar (BAR_WIDTH_MM, as in 4.4) along the finger axis, 1 mm beyond first touch."""
 PROFILE_X_MM = np.linspace(-3.0, 3.0, 61)
 SURFACE_MM = 0.05
 """Depth at which surface deflections are sampled (inside the mesh, whose surface strays 0.02 mm)."""
@@ -210,15 +213,14 @@ def bars_3d(shop: Workshop) -> list[Finding]:
     model, homogeneous-skin m33338 against the stiff-epidermis m43338: strain energy density at
     0.75 and 1.0 mm below the surface, how much of the cross-section it reaches, contact width."""
     folder = shop.preset("monkey")
-    runs = {m: indent_3d(folder, m, f"bar:{BAR_MM}", BAR_DEPTH_MM, orientation="parallel",
-                         position_mm=(0.0, 3.75)) for m in shop.progress.bar(("m33338", "m43338"),
-                                                                            desc="3D bar", unit="material")}
+    runs = {m: indent_3d(folder, m, f"bar:{BAR_WIDTH_MM}", BAR_DEPTH_MM, orientation="parallel")
+            for m in shop.progress.bar(("m33338", "m43338"), desc="3D bar", unit="material")}
     z0 = runs["m33338"].first_touch_z_mm()
     section = _section(z0)
     centroids, area = _section_cells(shop, f"monkey_section_z{z0:.2f}", section)
     cells = _cell_grid(centroids, z0)
     rows, series, fraction, peak, outside, cumulative, surface = [], [], {}, {}, {}, [], []
-    edge = 0.5 * BAR_MM + 1.0                    # 1 mm beyond the bar's edges
+    edge = 0.5 * BAR_WIDTH_MM + 1.0          # 1 mm beyond the bar's edges
     levels = np.linspace(0.0, 0.5, 51)
     for m, run in runs.items():
         for d in (0.75, 1.0):
@@ -294,7 +296,7 @@ def sections_2d_3d(shop: Workshop) -> list[Finding]:
     from fem.indentors import make_indentor
 
     folder = shop.preset("monkey")
-    run = indent_3d(folder, "m33338", f"bar:{BAR_MM}", BAR_DEPTH_MM, orientation="parallel", position_mm=(0.0, 3.75))
+    run = indent_3d(folder, "m33338", f"bar:{BAR_WIDTH_MM}", BAR_DEPTH_MM, orientation="parallel")
     z = run.contact.points_mm[:, 2]
     z0 = run.first_touch_z_mm()
     z1 = max(z0 - 2.0, z.min() + 1.0)
@@ -302,7 +304,7 @@ def sections_2d_3d(shop: Workshop) -> list[Finding]:
     section = _section(z0)
     shop.folder(name, section)
     cm2, model2 = shop.contact_model(name, "m33338")
-    bar = make_indentor(f"bar:{BAR_MM}")
+    bar = make_indentor(f"bar:{BAR_WIDTH_MM}")
     res2 = cm2.indent(bar, depth_mm=BAR_DEPTH_MM)
     u2 = cm2.compliance(bar.approach).displacement(res2.force_N)
     x = PROFILE_X_MM
@@ -379,11 +381,8 @@ def contact_vs_diameter(shop: Workshop) -> list[Finding]:
     with the cylinder's diameter, linearly at small depths; on the 3D human preset (1 mm elements)."""
     from fem.biomech import DeflectionExperiment, cylinder_series
 
-    def experiment(folder):
-        z = DeflectionExperiment(folder).points_mm[:, 2]
-        # across the finger through the middle of the pad, as the 3D default of `contact-series`
-        return DeflectionExperiment(folder, indentor="cylinder:C4", orientation="perpendicular",
-                                    position_mm=(0.0, 0.5 * (z.min() + z.max())), progress=shop.progress)
+    def experiment(folder):          # 3D default placement: across the finger, middle of the pad
+        return DeflectionExperiment(folder, indentor="cylinder:C4", progress=shop.progress)
 
     monkey = experiment(shop.preset("monkey"))
     force = float(cylinder_series(monkey, "m43338", codes=["C4"], depths_mm=[1.0]).force_N[0, 0])
@@ -451,8 +450,9 @@ def steps_3d(shop: Workshop) -> list[Finding]:
     L = STEP_HALF_WAVELENGTH_MM[5]
     z_mid = 0.5 * (sn.x[:, 2].min() + sn.x[:, 2].max())
     positions = np.arange(-L - 3.0, 3.0 + 1e-9, 0.5 if shop.quick else 0.25)
-    steps = [make_indentor("step:5", orientation="parallel", position_mm=(float(x), z_mid),
-                           approach=list(approach_down(info))) for x in positions]
+    down = approach_down(info)
+    steps = [make_indentor("step:5", orientation="parallel", position_mm=(float(x), z_mid), approach=list(down))
+             for x in positions]
     near = np.zeros(len(sn.nodes), bool)
     for ind in steps:
         near |= reach(sn.x, ind, np.zeros((1, 3)), 2 * STEP_DEPTH_MM)
@@ -468,7 +468,7 @@ def steps_3d(shop: Workshop) -> list[Finding]:
     rho = _rank_correlation(area, pressure)
     # the pad's top at x = x_top is over the step's convex half (v in [0, L/2]) for datums in
     # [x_top - L/2, x_top] and over its concave half for datums in [x_top - L, x_top - L/2]
-    x_top = float(sn.x[np.argmax(sn.x @ -approach_down(info)), 0])
+    x_top = float(sn.x[np.argmax(sn.x @ -down), 0])
     x_min, x_max = float(positions[np.argmin(area)]), float(positions[np.argmax(area)])
     margin = 0.5
     ok_places = (x_top - L / 2 - margin <= x_min <= x_top + margin) and (x_top - L - margin <= x_max <= x_top - L / 2 + margin)
