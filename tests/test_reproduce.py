@@ -7,12 +7,7 @@ import pytest
 
 import pipeline
 from fem import thesis, thesis2d
-from fem.findings import DIFFERS, REPRODUCED, Workshop
-
-
-@pytest.fixture(scope="module")
-def shop(tmp_path_factory):
-    return Workshop(tmp_path_factory.mktemp("thesis_models"), quick=True)
+from fem.findings import DIFFERS, REPRODUCED
 
 
 def _by_key(findings):

@@ -5,12 +5,7 @@ models in tests/test_biomech.py; dorsal ratios in tests/test_dorsal_trend.py."""
 import pytest
 
 from fem import thesis3d
-from fem.findings import DIFFERS, REPRODUCED, Workshop
-
-
-@pytest.fixture(scope="module")
-def shop(tmp_path_factory):
-    return Workshop(tmp_path_factory.mktemp("thesis3d_models"), quick=True)
+from fem.findings import DIFFERS, REPRODUCED
 
 
 def _by_key(findings):

@@ -5,12 +5,7 @@ import numpy as np
 import pytest
 
 from fem import thesis2d
-from fem.findings import DIFFERS, REPRODUCED, Workshop
-
-
-@pytest.fixture(scope="module")
-def shop(tmp_path_factory):
-    return Workshop(tmp_path_factory.mktemp("thesis_ch4_models"), quick=True)
+from fem.findings import DIFFERS, REPRODUCED
 
 
 def _by_key(findings):
