@@ -87,21 +87,23 @@ class Workshop:
     def size_mm(self) -> float:
         return 0.25 if self.quick else 0.125
 
-    def sizing(self):
+    def sizing(self, size_mm: float | None = None):
         from fem.mesh2d import Sizing2D
 
-        return Sizing2D(size_mm=self.size_mm)
+        return Sizing2D(size_mm=self.size_mm if size_mm is None else float(size_mm))
 
-    def folder(self, name: str, domain=None) -> Path:
-        """Model folder `name` (one of MODELS, or any name with its `domain`), meshed if absent."""
+    def folder(self, name: str, domain=None, size_mm: float | None = None) -> Path:
+        """Model folder `name` (one of MODELS, or any name with its `domain`), meshed if absent;
+        size_mm: element size in the top 1 mm when not this workshop's (folder `name_<size>mm`)."""
         from fem import mesh2d
 
-        out = self.root / name
+        size = self.size_mm if size_mm is None else float(size_mm)
+        out = self.root / (name if size == self.size_mm else f"{name}_{size:g}mm")
         if not (out / "model.json").is_file():
             if domain is None:
                 build, args, kw = self.MODELS[name]
                 domain = getattr(mesh2d, build)(*args, **kw)
-            mesh2d.run_mesh2d(out, domain, self.sizing(), progress=self.progress)
+            mesh2d.run_mesh2d(out, domain, self.sizing(size), progress=self.progress)
         return out
 
     def preset(self, preset: str, size_mm: float | None = None) -> Path:

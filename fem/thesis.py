@@ -29,10 +29,10 @@ NOT_RUN = (
     ("6.2.2, 6.2.3, figures 6-15 to 6-23", "Surface profiles and forces of human fingertips in vivo "
      "under cylinders and flat indentors: the recordings are printed as curves only (`pipeline.py "
      "fit-material` fits a model to recorded profiles and forces)."),
-    ("6.3.3, figures 6-31 to 6-38", "Surface, pressure and strain-energy maps under steps 1, 3 and 5 "
-     "at chosen positions: pictures without numbers to compare; the step-5 sweep's contact area "
-     "and peak pressure are compared above. `pipeline.py indent` with a step sweep and receptors "
-     "writes the population response maps."),
+    ("6.3.3, figures 6-31 to 6-35", "Surface, pressure and strain-energy maps under steps 1, 3 and 5 "
+     "at chosen positions: pictures without numbers to compare; the step-5 sweep's contact area, "
+     "peak pressure and the spatial response profiles of figs. 6-36 to 6-38 are compared above. "
+     "`pipeline.py indent` with a step sweep and receptors writes the population response maps."),
     ("6.3.1, figures 6-26 to 6-28; 6.3.2, figure 6-29; 6.3.3, figure 6-40", "Predicted against recorded "
      "SA discharge under bars, cylinders and steps (Phillips and Johnson 1981, Srinivasan and LaMotte "
      "1987, 1991): the recordings are printed as curves only (`pipeline.py analyze` fits the receptor "

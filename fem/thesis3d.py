@@ -66,51 +66,115 @@ def dorsal_half(shop: Workshop) -> list[Finding]:
 
 
 # ----------------------------------------------------------------------------- 6.2.1: layers (fig. 6-10)
+LAYER2_CODES = ("m42338", "m44338")      # layer 2 tenfold softer and stiffer than m43338
+THIN_SKIN_MM = (0.25, 0.25)              # epidermis, dermis of the thin-skin section
+
+
+def layer2_change(lo, hi, reach_mm: float = 3.0) -> tuple[float, list[float]]:
+    """(deflection change 0.5 mm from the load [mm], distances where it changes sign [mm]) when
+    layer 2 is stiffened: lo, hi map distances [mm] to deflections [mm] (softer, stiffer);
+    (nan, []) where either is not finite (a solve that did not reach the depth)."""
+    d = np.linspace(0.05, reach_mm, 296)
+    diff = hi(d) - lo(d)
+    if not np.all(np.isfinite(diff)):
+        return float("nan"), []
+    flips = np.flatnonzero(np.sign(diff[1:]) != np.sign(diff[:-1]))
+    return float(hi(np.array([0.5]))[0] - lo(np.array([0.5]))[0]), \
+        [float(d[i] - diff[i] * (d[i + 1] - d[i]) / (diff[i + 1] - diff[i])) for i in flips]
+
+
+def _line_profile(folder, code: str, large_deformation: bool):
+    """distance [mm] -> deflection [mm] under a prescribed nodal line 2 mm deep (the surface
+    vertex at the section's centre pushed down and held sideways; both sides averaged)."""
+    from fem.biomech import side_profile
+    from fem.nonlinear import compare_line_load
+
+    c = compare_line_load(folder, depths_mm=(2.0,), material=code, large_deformation=large_deformation)
+    d, w = side_profile(c.distance_mm, (c.deflection_nonlinear_mm if large_deformation else c.deflection_linear_mm)[0])
+    return lambda x: np.interp(x, d, w)
+
+
+def monkey_section(z_mm: float, **skin):
+    """fem.mesh2d.Domain2D: the monkey preset's five-layer cross-section at z_mm; skin: optional
+    epidermis_mm, dermis_mm (default thesis 6.1's 0.5 and 1.0 mm)."""
+    from fem.mesh2d import section_domain
+    from fem.model import model_from_args, params_for
+
+    return section_domain(model_from_args(None, "monkey", params_for("monkey", **skin)), z_mm)
+
+
+def layer2_reasons(shop: Workshop) -> dict:
+    """{case: layer2_change} of the candidate reasons on the monkey section at z = 5 mm: the
+    thesis's prescribed nodal line instead of the wedge (linear, and neo-Hookean on 0.25 mm
+    elements: a node pushed 2 mm into 0.125 mm elements inverts them before the depth), and a
+    thin skin (THIN_SKIN_MM) under the wedge."""
+    from fem.biomech import DeflectionExperiment
+
+    out = {"2D section, nodal line": layer2_change(
+        *(_line_profile(shop.folder("monkey_section", monkey_section(5.0)), code, False) for code in LAYER2_CODES))}
+    coarse = shop.folder("monkey_section", monkey_section(5.0), size_mm=0.25)
+    out["2D section, nodal line, neo-Hookean"] = layer2_change(*(_line_profile(coarse, code, True) for code in LAYER2_CODES))
+    epi, der = THIN_SKIN_MM
+    thin = shop.folder(f"monkey_section_skin{epi:g}+{der:g}", monkey_section(5.0, epidermis_mm=epi, dermis_mm=der))
+    exp = DeflectionExperiment(thin, progress=shop.progress)
+    out[f"2D section, skin {epi:g} + {der:g} mm"] = \
+        layer2_change(*(exp.profiles(code, (2.0,))[0].at for code in LAYER2_CODES))
+    return out
+
+
 def layer_effects(shop: Workshop) -> list[Finding]:
     """Thesis 6.2.1, figure 6-10: vary each layer's modulus tenfold around m43338 under a 2 mm line
     load (a wedge across the finger), on the 3D monkey preset and on its five-layer cross-section
-    at z = 5 mm (2D, plane strain)."""
-    from fem import mesh2d
+    at z = 5 mm (2D, plane strain). Layer 2's sense is then measured on the section under the
+    thesis's load (a prescribed nodal line, linear and neo-Hookean) and with a thinner skin."""
     from fem.biomech import DeflectionExperiment, layer_study
-    from fem.model import model_from_args, params_for
 
-    section = mesh2d.section_domain(model_from_args(None, "monkey", params_for("monkey")), 5.0)
-    folders = {"3D monkey": shop.preset("monkey"), "2D section": shop.folder("monkey_section", section)}
+    folders = {"3D monkey": shop.preset("monkey"), "2D section": shop.folder("monkey_section", monkey_section(5.0))}
     d = np.linspace(0.0, 3.5, 36)
-    series, table, near, neutral, eff = [], [], {}, {}, {}
+    series, table, change, eff = [], [], {}, {}
     for label, folder in folders.items():
         study = layer_study(DeflectionExperiment(folder, progress=shop.progress), "m43338", depths_mm=(2.0,))
         eff[label] = {e.layer: e for e in study.effects}
-        lo, hi = (study.profiles[study.layers[2][k]][0] for k in (0, -1))
-        near[label] = float((hi.at(np.array([0.5])) - lo.at(np.array([0.5])))[0])
-        neutral[label] = eff[label][2].neutral_mm
+        lo, hi = (study.profiles[code][0] for code in LAYER2_CODES)
+        change[label] = layer2_change(lo.at, hi.at)
         series += [Series(f"{label}, {code}", d.tolist(), study.profiles[code][0].at(d).tolist(),
                           "-" if label.startswith("3D") else "--") for code in study.layers[2]]
         table += [{"model": label, "layer": e.layer, "codes": " ".join(e.codes), "most_affected_mm": e.most_affected_mm,
                    "difference_mm": e.difference_mm, "neutral_mm": " ".join(f"{v:.2f}" for v in e.neutral_mm)}
                   for e in study.effects]
-    first = neutral["3D monkey"][0] if neutral["3D monkey"] else None
-    ok = near["3D monkey"] > 0 and first is not None and abs(first - 1.25) < 0.25   # stiffer: more deflection near
-    sense = {k: "more" if v > 0 else "less" for k, v in near.items()}
-    where = {k: ", ".join(f"{v:.2f}" for v in n) or "none" for k, n in neutral.items()}
+    change.update(layer2_reasons(shop))
+    epi, der = THIN_SKIN_MM
+    thin_label = f"2D section, skin {epi:g} + {der:g} mm"
+    table += [{"model": k, "layer": 2, "codes": " ".join(LAYER2_CODES), "change_at_0.5mm": v[0],
+               "neutral_mm": " ".join(f"{x:.2f}" for x in v[1])} for k, v in change.items()]
+    near, flips = change["3D monkey"]
+    ok = near > 0 and bool(flips) and abs(flips[0] - 1.25) < 0.25   # stiffer: more deflection near
+    sense = {k: "the solve did not reach 2 mm" if np.isnan(v[0]) else
+             f"{v[0]:+.3f} mm, sign change at {', '.join(f'{x:.2f}' for x in v[1]) or 'none'} mm"
+             for k, v in change.items()}
     e3, e2 = eff["3D monkey"], eff["2D section"]
     return [Finding(
         "fig6-10_layers", "6.2.1, figure 6-10", "Effect of each layer's stiffness on the line-load profile",
         "Within about 1.25 mm of a 2 mm line load a stiffer layer 2 deflects more, beyond it less; "
         "layers 3 and 4 stiffen the model everywhere, most at about 1.3 and 2.0 mm from the load.",
-        "distance where stiffening layer 2 changes the sign of its effect, 3D monkey [mm]", 1.25, first,
-        REPRODUCED if ok else DIFFERS,
-        f"Stiffening layer 2 (m42338 -> m44338) changes the deflection 0.5 mm from the load by "
-        f"{near['3D monkey']:+.3f} mm in the 3D model ({sense['3D monkey']} deflection; sign changes at "
-        f"{where['3D monkey']} mm) and by {near['2D section']:+.3f} mm on its plane-strain section "
-        f"({sense['2D section']}; {where['2D section']} mm). Layers 3 and 4 are most affected at "
-        f"{e3[3].most_affected_mm:.2f} and {e3[4].most_affected_mm:.2f} mm in 3D ({e2[3].most_affected_mm:.2f}, "
-        f"{e2[4].most_affected_mm:.2f} mm in 2D; thesis 1.3 and 2.0 mm). "
-        + ("The 3D model and its section agree on the sense, so the plane-strain assumption is not "
-           "what separates the project from the thesis here; the loading (a rigid wedge in contact "
-           "here, a prescribed nodal line load in the thesis) was not compared."
-           if (near["3D monkey"] > 0) == (near["2D section"] > 0) else
-           "The 3D model and its section disagree on the sense: the plane-strain assumption matters."),
+        "distance where stiffening layer 2 changes the sign of its effect, 3D monkey [mm]", 1.25,
+        flips[0] if flips else None, REPRODUCED if ok else DIFFERS,
+        f"Stiffening layer 2 ({LAYER2_CODES[0]} -> {LAYER2_CODES[1]}) changes the deflection 0.5 mm "
+        f"from the load by {sense['3D monkey']} in the 3D model, and by {sense['2D section']} on its "
+        f"plane-strain section (epidermis 0.5, dermis 1.0 mm, as thesis 6.1 states). Layers 3 and 4 "
+        f"are most affected at {e3[3].most_affected_mm:.2f} and {e3[4].most_affected_mm:.2f} mm in 3D "
+        f"({e2[3].most_affected_mm:.2f}, {e2[4].most_affected_mm:.2f} mm in 2D; thesis 1.3 and 2.0 mm). "
+        f"Measured reason for layer 2, on the section: not the plane-strain assumption (3D and section "
+        f"agree), not the load (the thesis's prescribed nodal line: "
+        f"{sense['2D section, nodal line']}), not large deformation (the same line, neo-Hookean on 0.25 mm elements: "
+        f"{sense['2D section, nodal line, neo-Hookean']}). "
+        + (f"It is the skin's thickness: with a {epi:g} mm epidermis and {der:g} mm dermis the sense "
+           f"turns to the thesis's ({sense[thin_label]}; more deflection between the two, the thesis's "
+           f"crossover is 1.25 mm). Under the 1.5 mm skin of an 8.6 mm wide section layer 2 acts as "
+           f"the foundation of the epidermis; under a thin skin, as part of the bending skin."
+           if change[thin_label][0] > 0 else
+           f"A thinner skin ({epi:g} mm epidermis, {der:g} mm dermis) does not turn it either "
+           f"({sense[thin_label]})."),
         "distance from the load [mm]", "surface deflection [mm]", series, table)]
 
 
@@ -182,13 +246,6 @@ def sample(model, u, grid, names=("sed_MPa", "max_compressive_strain")) -> dict:
     return s.measures(s.operator @ u, list(names))
 
 
-def _section(z_mm: float):
-    from fem.mesh2d import section_domain
-    from fem.model import model_from_args, params_for
-
-    return section_domain(model_from_args(None, "monkey", params_for("monkey")), z_mm)
-
-
 def _section_cells(shop: Workshop, name: str, section):
     """(centroids (m, 2) mm, areas (m,) mm^2) of the triangles of a section's 2D mesh."""
     from fem.modelfolder import read_model
@@ -216,7 +273,7 @@ def bars_3d(shop: Workshop) -> list[Finding]:
     runs = {m: indent_3d(folder, m, f"bar:{BAR_WIDTH_MM}", BAR_DEPTH_MM, orientation="parallel")
             for m in shop.progress.bar(("m33338", "m43338"), desc="3D bar", unit="material")}
     z0 = runs["m33338"].first_touch_z_mm()
-    section = _section(z0)
+    section = monkey_section(z0)
     centroids, area = _section_cells(shop, f"monkey_section_z{z0:.2f}", section)
     cells = _cell_grid(centroids, z0)
     rows, series, fraction, peak, outside, cumulative, surface = [], [], {}, {}, {}, [], []
@@ -301,7 +358,7 @@ def sections_2d_3d(shop: Workshop) -> list[Finding]:
     z0 = run.first_touch_z_mm()
     z1 = max(z0 - 2.0, z.min() + 1.0)
     name = f"monkey_section_z{z0:.2f}"
-    section = _section(z0)
+    section = monkey_section(z0)
     shop.folder(name, section)
     cm2, model2 = shop.contact_model(name, "m33338")
     bar = make_indentor(f"bar:{BAR_WIDTH_MM}")
@@ -310,7 +367,7 @@ def sections_2d_3d(shop: Workshop) -> list[Finding]:
     x = PROFILE_X_MM
     two = sample(model2, u2, section_receptors(section, x, 0.75))
     three = sample(run.model, run.u, section_receptors(section, x, 0.75, z0))
-    off = sample(run.model, run.u, section_receptors(_section(z1), x, 0.75, z1))
+    off = sample(run.model, run.u, section_receptors(monkey_section(z1), x, 0.75, z1))
     eps = {k: np.abs(v["max_compressive_strain"]) for k, v in (("2D", two), ("3D", three), ("off", off))}
     sed = {k: v["sed_MPa"] for k, v in (("2D", two), ("3D", three), ("off", off))}
     eps_ratio = float(eps["3D"].max() / eps["2D"].max())
@@ -444,6 +501,7 @@ def steps_3d(shop: Workshop) -> list[Finding]:
     from fem.contact import ContactModel, reach
     from fem.indentors import STEP_HALF_WAVELENGTH_MM, make_indentor
     from fem.modelfolder import CONTACT_REGION, approach_down, factorise, read_model
+    from fem.receptors import ReceptorSampler
 
     model, info = read_model(shop.preset("monkey"), material="m43338")
     sn = model.surface_nodes(CONTACT_REGION[3])
@@ -456,15 +514,16 @@ def steps_3d(shop: Workshop) -> list[Finding]:
     near = np.zeros(len(sn.nodes), bool)
     for ind in steps:
         near |= reach(sn.x, ind, np.zeros((1, 3)), 2 * STEP_DEPTH_MM)
-    cm = ContactModel.from_fe(model, factorise(model, info, sn.nodes[near], shop.progress), CONTACT_REGION[3])
+    receptors_x = np.arange(-2.5, 2.5 + 1e-9, 0.25)       # the population: 0.75 mm deep across the section z_mid
+    sampler = ReceptorSampler(model, section_receptors(monkey_section(z_mid), receptors_x, 0.75, z_mid))
+    cm = ContactModel.from_fe(model, factorise(model, info, sn.nodes[near], shop.progress), CONTACT_REGION[3],
+                              observe=sampler.operator)
     force = cm.indent(steps[-1], depth_mm=STEP_DEPTH_MM).total_force_N    # the lower flat alone under the pad
-    area, pressure, at_v = [], [], []
-    for x, ind in zip(positions, shop.progress.bar(steps, desc="step 5 across the pad", unit="position")):
-        res = cm.indent(ind, force_N=force)
-        area.append(res.contact_area_mm2)
-        pressure.append(1e3 * res.max_pressure_MPa)
-        at_v.append(float(cm.points_mm[np.argmax(res.pressure_MPa), 0] - x))   # where on the step it peaks
-    area, pressure = np.array(area), np.array(pressure)
+    results = [cm.indent(ind, force_N=force) for ind in shop.progress.bar(steps, desc="step 5 across the pad", unit="position")]
+    area = np.array([r.contact_area_mm2 for r in results])
+    pressure = np.array([1e3 * r.max_pressure_MPa for r in results])
+    at_v = [float(cm.points_mm[np.argmax(r.pressure_MPa), 0] - x) for r, x in zip(results, positions)]   # where on the step it peaks
+    sed = np.array([sampler.measures(r.observed, ["sed_MPa"])["sed_MPa"] for r in results])   # (positions, receptors)
     rho = _rank_correlation(area, pressure)
     # the pad's top at x = x_top is over the step's convex half (v in [0, L/2]) for datums in
     # [x_top - L/2, x_top] and over its concave half for datums in [x_top - L, x_top - L/2]
@@ -500,4 +559,39 @@ def steps_3d(shop: Workshop) -> list[Finding]:
         f"{at_v[k]:+.2f} mm into the rise (its convex half is {L / 2:.2f} mm long), not over the pad's "
         f"top: the peak pressure follows the curvature where the step bites, the area the shape "
         f"over the top, and they part where the two differ.",
-        "step position (datum) [mm]", "contact area [mm^2], peak pressure [kPa] x 10", series, rows)]
+        "step position (datum) [mm]", "contact area [mm^2], peak pressure [kPa] x 10", series, rows),
+        _spatial_response(positions, receptors_x, sed, force)]
+
+
+def _spatial_response(positions, receptors_x, sed, force_N: float, chosen=(-1.5, 0.0, 1.5)) -> Finding:
+    """Thesis 6.3.3, figures 6-35..6-38: the spatial response profile of a receptor (its SED as
+    step 5 crosses the pad) depends on where the receptor sits. sed (positions, receptors) MPa at
+    0.75 mm depth across the middle section; profiles of the chosen receptors, each over its own
+    peak, against the step position minus the receptor's x: identical on a flat half-space."""
+    cols = [int(np.argmin(np.abs(receptors_x - x))) for x in chosen]
+    lo = max(positions[0] - receptors_x[j] for j in cols)
+    hi = min(positions[-1] - receptors_x[j] for j in cols)
+    rel = np.linspace(lo, hi, 200)
+    prof = {j: np.interp(rel, positions - receptors_x[j], sed[:, j] / sed[:, j].max()) for j in cols}
+    spread = max(float(np.abs(prof[a] - prof[b]).max()) for a in cols for b in cols if a < b)
+    rows = [{"receptor_x_mm": float(receptors_x[j]), "peak_sed_Pa": float(1e6 * sed[:, j].max()),
+             "peak_at_step_minus_receptor_mm": float(positions[np.argmax(sed[:, j])] - receptors_x[j]),
+             "population_peak_sed_Pa_per_position": " ".join(f"{1e6 * v:.3g}" for v in sed.max(axis=1))} for j in cols]
+    shifts = ", ".join(f"{r['peak_at_step_minus_receptor_mm']:+.2f}" for r in rows)
+    peaks = ", ".join(f"{r['peak_sed_Pa']:.3g}" for r in rows)
+    return Finding(
+        "fig6-38_spatial_response", "6.3.3, figures 6-35 to 6-38",
+        "Spatial response profiles of receptors at different places (step 5 across the 3D monkey)",
+        "For an identical stimulus the location of the receptor changes the form of its spatial "
+        "response profile (the curvature of the fingertip changes the stress state near each receptor).",
+        "largest difference between the receptors' peak-normalised profiles, aligned on the receptor [of peak]",
+        None, spread, REPRODUCED if spread > 0.1 else DIFFERS,
+        f"SED 0.75 mm deep at {len(receptors_x)} receptors across the middle section, {len(positions)} "
+        f"step positions at {1e3 * force_N:.2f} mN (the population of figs. 6-35 to 6-37; rates are not "
+        f"modelled). Receptors at x = {', '.join(f'{receptors_x[j]:+.2f}' for j in cols)} mm: peaks "
+        f"{peaks} Pa, with the step's datum {shifts} mm from "
+        f"the receptor; their normalised profiles, aligned on the receptor, differ by up to "
+        f"{100 * spread:.0f} % of the peak (0 on a flat half-space, where a shift of the receptor only "
+        f"shifts its profile; judged against 10 %).",
+        "step datum minus receptor x [mm]", "SED / its peak",
+        [Series(f"receptor at x = {receptors_x[j]:+.2f} mm", rel.tolist(), prof[j].tolist()) for j in cols], rows)

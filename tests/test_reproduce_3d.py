@@ -42,10 +42,34 @@ def test_2d_section_against_3d(shop):
 def test_step_across_the_pad(shop):
     """Measured: the smallest contact at datum -0.63 mm (the pad's top +0.13 mm, over the convex
     half of the rise), the largest at -3.13 mm (concave end -3.00 mm); area against peak pressure
-    rank correlation -0.69, not the thesis's 'always' inverse."""
+    rank correlation -0.69, not the thesis's 'always' inverse. Receptors 0.75 mm deep at x = -1.5,
+    0, +1.5 mm: peak SED 15.2, 30.4, 9.3 Pa; their peak-normalised spatial response profiles,
+    aligned on the receptor, differ by up to 67 % of the peak (0 on a flat half-space)."""
     f = _by_key(thesis3d.steps_3d(shop))
     ext, inv = f["fig6-39_step_extremes"], f["fig6-39_step_inverse"]
     assert ext.verdict == REPRODUCED
     areas = [r["contact_area_mm2"] for r in ext.table]
     assert areas[0] == pytest.approx(areas[-1], rel=0.02)       # the two flats: the same contact
     assert -0.9 < inv.value < -0.4 and inv.verdict == DIFFERS
+    spatial = f["fig6-38_spatial_response"]
+    assert spatial.verdict == REPRODUCED and spatial.value == pytest.approx(0.67, abs=0.1)
+    peaks = [r["peak_sed_Pa"] for r in spatial.table]
+    assert peaks[1] > 1.5 * max(peaks[0], peaks[2])          # the receptor under the pad's top feels most
+
+
+def test_layer2_sense_turns_with_the_skin_thickness(shop):
+    """Fig. 6-10 on the monkey section (0.25 mm elements). Measured: stiffening layer 2 changes the
+    deflection 0.5 mm from a 2 mm wedge by -0.39 mm (sign change 1.55 mm); the thesis's prescribed
+    nodal line gives -0.47 mm linear and -0.46 mm neo-Hookean; a 0.25 + 0.25 mm skin gives
+    +0.26 mm (more deflection from 0.17 to 2.58 mm), the thesis's sense."""
+    from fem.biomech import DeflectionExperiment
+
+    section = shop.folder("monkey_section", thesis3d.monkey_section(5.0))
+    exp = DeflectionExperiment(section)
+    near, flips = thesis3d.layer2_change(*(exp.profiles(c, (2.0,))[0].at for c in thesis3d.LAYER2_CODES))
+    assert near == pytest.approx(-0.39, abs=0.05) and flips == [pytest.approx(1.55, abs=0.15)]
+    reasons = thesis3d.layer2_reasons(shop)
+    assert reasons["2D section, nodal line"][0] == pytest.approx(-0.47, abs=0.05)
+    assert reasons["2D section, nodal line, neo-Hookean"][0] == pytest.approx(-0.46, abs=0.05)
+    thin_near, thin_flips = reasons["2D section, skin 0.25 + 0.25 mm"]
+    assert thin_near == pytest.approx(0.26, abs=0.05) and thin_flips[-1] == pytest.approx(2.58, abs=0.2)
