@@ -104,15 +104,21 @@ def markdown_report(findings, quick: bool) -> str:
                f"difference {_difference(f)}).", "", f"**Verdict: {f.verdict}.** {f.reason}", "",
                f"![{f.key}](claims/{f.key}.png)"]
         if f.table:
-            keys = list(f.table[0])
+            keys, rows = _table(f.table)
             md += ["", "| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]
-            md += ["| " + " | ".join(_cell(r[k]) for k in keys) + " |" for r in f.table]
+            md += ["| " + " | ".join(r) + " |" for r in rows]
     md += ["", "## Not run here", ""] + [f"- **{s}.** {why}" for s, why in NOT_RUN]
     return "\n".join(md) + "\n"
 
 
 def _cell(v) -> str:
     return f"{v:.4g}" if isinstance(v, float) else str(v)
+
+
+def _table(rows: list[dict]) -> tuple[list[str], list[list[str]]]:
+    """(column names in first-seen order over all rows, cells): a row without a column gets ''."""
+    keys = list(dict.fromkeys(k for r in rows for k in r))
+    return keys, [[_cell(r[k]) if k in r else "" for k in keys] for r in rows]
 
 
 def html_report(findings, quick: bool) -> str:
@@ -137,8 +143,7 @@ def html_report(findings, quick: bool) -> str:
                  f"<p><b>Verdict: {e(f.verdict)}.</b> {e(f.reason)}</p>",
                  f"<img src='claims/{e(f.key)}.png' alt='{e(f.key)}'>"]
         if f.table:
-            keys = list(f.table[0])
-            body.append(table(keys, [[_cell(r[k]) for k in keys] for r in f.table]))
+            body.append(table(*_table(f.table)))
     body += ["<h2>Not run here</h2><ul>"] + [f"<li><b>{e(s)}.</b> {e(why)}</li>" for s, why in NOT_RUN] + ["</ul>"]
     style = ("body{font-family:sans-serif;max-width:60em;margin:auto}table{border-collapse:collapse;"
              "font-size:small}td,th{border:1px solid #ccc;padding:2px 6px}img{max-width:100%}")

@@ -594,4 +594,4 @@ def _spatial_response(positions, receptors_x, sed, force_N: float, chosen=(-1.5,
         f"{100 * spread:.0f} % of the peak (0 on a flat half-space, where a shift of the receptor only "
         f"shifts its profile; judged against 10 %).",
         "step datum minus receptor x [mm]", "SED / its peak",
-        [Series(f"receptor at x = {receptors_x[j]:+.2f} mm", rel.tolist(), prof[j].tolist()) for j in cols], rows)
+        [Series(f"receptor at x = {receptors_x[j]:+.2f} mm", rel.tolist(), prof[j].tolist(), "-") for j in cols], rows)

@@ -90,3 +90,11 @@ def test_reproduce_refuses_a_foreign_or_other_kind_of_folder(tmp_path, capsys):
     assert pipeline.main(["reproduce", "--quick", "--out", str(other)]) == 2
     assert "not empty" in capsys.readouterr().err
     assert sorted(p.name for p in other.iterdir()) == ["notes.txt"]
+
+
+def test_report_tables_take_the_union_of_row_columns():
+    from commands.reproduce import _table
+
+    keys, rows = _table([{"model": "3D", "layer": 2, "most_affected_mm": 1.25}, {"model": "2D", "change_mm": -0.5}])
+    assert keys == ["model", "layer", "most_affected_mm", "change_mm"]
+    assert rows == [["3D", "2", "1.25", ""], ["2D", "", "", "-0.5"]]
