@@ -76,18 +76,29 @@ def indent_folder(model_dir, out_dir, scene: Scene, progress: bool = True, sched
         run = run_experiments(model, info, scene, progress=as_progress(progress), store=store)
     for warning in run.warnings:
         print(f"warning: {warning}", file=sys.stderr)
+    afferents = (None, {})
+    if scene.afferents is not None:
+        from fem.afferents import scene_responses
+
+        with as_progress(progress).task("afferent inputs and spike trains", kind="afferents"):
+            afferents = scene_responses(run)
     with staged_output(out_dir) as tmp:
-        tables = write_run(tmp, model_dir, run)
+        tables = write_run(tmp, model_dir, run, afferents)
         if scene.output.plots:
             from fem import plots  # matplotlib: only when figures are written
 
             for e in run.experiments:
                 for name, fig in plots.indent_figures(e, run, tables[e.name]).items():
                     plots.save(fig, tmp / name)
+                if e.name in afferents[1]:
+                    depth = [float(r.depth_mm.max()) for _, r in e.steps]
+                    for name, fig in plots.afferent_figures(e.name, afferents[1][e.name], depth).items():
+                        plots.save(fig, tmp / name)
     total = time.perf_counter() - t_start
     lines = [(f"indentation results in {out_dir} ({total:.1f} s; model {model.ndof} DOFs, "
               f"{len(run.surface.nodes)} contact candidates, {len(run.grid.points_mm)} receptor points)")]
     lines += [experiment_line(e, model.dim) for e in run.experiments]
+    lines += [afferent_line(name, resp) for name, resp in afferents[1].items()]
     lines += [f"  response model: {how} {key} ({size / 2**20:.1f} MB, built in {built:.2f} s)"
               for key, how, built, size in run.responses]
     return "\n".join(lines)
@@ -100,9 +111,10 @@ def _distributable(scene: Scene, store, progress) -> bool:
     from fem.runfolder import writes_pvd
 
     why = ("it has one experiment" if len(scene.experiments) < 2 else
+           "its afferents need the factorised model in this process" if scene.afferents is not None else
            "the stored response models answer it without factorising" if store is not None else
            "its PVD output needs the full fields in this process (--no-pvd distributes it)"
-           if any(writes_pvd(scene.output, len(e.offsets_mm) * len(e.loads)) for e in scene.experiments) else None)
+           if any(writes_pvd(scene.output, len(e.indentations)) for e in scene.experiments) else None)
     if why and progress:
         print(f"scheduler: running the scene in this process: {why}", file=sys.stderr, flush=True)
     return why is None
@@ -147,12 +159,26 @@ def response_store(model_dir, scene: Scene, progress=True):
     store = ResponseStore(model_dir)
     if not store.folder.is_dir():
         return None
-    if not any(writes_pvd(scene.output, len(e.offsets_mm) * len(e.loads)) for e in scene.experiments):
+    if scene.afferents is not None:
+        if progress:
+            print("response model: not used, afferents need the stresses at their own sites: factorising",
+                  file=sys.stderr, flush=True)
+        return None
+    if not any(writes_pvd(scene.output, len(e.indentations)) for e in scene.experiments):
         return store
     if progress:
         print("response model: not used, the PVD output needs full fields: factorising (--no-pvd "
               "answers from the stored response models)", file=sys.stderr, flush=True)
     return None
+
+
+def afferent_line(name: str, resp) -> str:
+    """Summary of one experiment's afferents: per class the count, how many fired, the mean rate."""
+    cls = resp.population.afferent_class.astype(str)
+    rate = resp.rates_hz()
+    parts = [f"{(cls == c).sum()} {c} ({int((rate[cls == c] > 0).sum())} fired, mean {rate[cls == c].mean():.1f} Hz)"
+             for c in dict.fromkeys(cls)]
+    return f"  {name} afferents: " + ", ".join(parts) + f" over {resp.duration_s:.2f} s -> {name}/spikes.csv"
 
 
 def _span(values, fmt=".4g") -> str:

@@ -125,8 +125,11 @@ class FactorCompliance(Compliance):
         return out
 
     def displacement(self, force_N) -> np.ndarray:
-        """(n_dofs,) full displacement field for nodal contact forces (m,): one solve."""
-        return np.asarray(self.solve((self.B @ force_N)[:, None])).reshape(-1)
+        """(n_dofs,) full displacement field for nodal contact forces (m,), or (n_dofs, k) for k
+        force vectors (m, k): one solve with k right-hand sides."""
+        F = np.asarray(force_N, float)
+        u = np.asarray(self.solve(np.asfortranarray(self.B @ F.reshape(self.m, -1))))
+        return u.reshape(-1) if F.ndim == 1 else u.reshape(-1, F.shape[1])
 
 
 class DenseReach:

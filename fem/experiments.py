@@ -145,10 +145,14 @@ def run_experiments(model, info, scene: Scene, progress=None, store=None, only: 
                                                     touched, progress)
         cm = contact_model(model, sn, responses)
     todo = [(run, off, load) for k, run in enumerate(runs) if only is None or k == only
-            for off in run.experiment.offsets_mm for load in run.experiment.loads]
+            for off, load in run.experiment.indentations]
+    solved = {}                       # a trace repeats indentations (a hold): each is solved once
     for run, off, load in progress.bar(todo, desc="indentations", unit="indentation"):
         t0 = time.perf_counter()
-        run.steps.append((off, _indent_one(cm, run, off, load)))
+        key = (id(run), tuple(off), tuple(sorted(load.items())))
+        if key not in solved:
+            solved[key] = _indent_one(cm, run, off, load)
+        run.steps.append((off, solved[key]))
         run.seconds += time.perf_counter() - t0
     return SceneRun(model, info, scene, cm, sn, grid, sampler, list(rc.measures), line, runs, warnings, used)
 

@@ -116,9 +116,15 @@ def open_model(model_dir, material=None, nu=None, progress=None):
 
 def receptor_surface(model, sn) -> tuple[np.ndarray, np.ndarray]:
     """(positions (k, dim) mm, outward normals (k, dim)) of the contact-region nodes `sn` that may
-    carry receptor sites: all but those on a 3D end cut. Below a node on the rim of a cut the
-    receptors lie on the cut plane, which the mesh reproduces only within pytetwild's envelope
-    (0.02 mm): with a 0.05 mm envelope one fell outside the mesh."""
-    ends = [model.region_nodes(r) for r in ("proximal", "distal") if r in model.regions]
-    keep = ~np.isin(sn.nodes, np.concatenate(ends)) if ends else np.ones(len(sn.nodes), bool)
+    carry receptor sites (`pad_nodes`)."""
+    keep = pad_nodes(model, sn)
     return sn.x[keep], sn.normal[keep]
+
+
+def pad_nodes(model, sn) -> np.ndarray:
+    """(n,) bool: the contact-region nodes `sn` that may carry receptor sites: all but those on a
+    3D end cut. Below a node on the rim of a cut the receptors lie on the cut plane, which the mesh
+    reproduces only within pytetwild's envelope (0.02 mm): with a 0.05 mm envelope one fell
+    outside the mesh."""
+    ends = [model.region_nodes(r) for r in ("proximal", "distal") if r in model.regions]
+    return ~np.isin(sn.nodes, np.concatenate(ends)) if ends else np.ones(len(sn.nodes), bool)

@@ -44,7 +44,7 @@ def force_unit(dim: int) -> str:
 
 
 # --------------------------------------------------------------------------- indentation runs
-KEY_LABELS = {"depth_mm": "depth, mm", "offset_x_mm": "indentor offset along x, mm",
+KEY_LABELS = {"depth_mm": "depth, mm", "time_s": "time, s", "offset_x_mm": "indentor offset along x, mm",
               "offset_z_mm": "indentor offset along z, mm"}
 
 
@@ -120,6 +120,7 @@ def indent_figures(run, scene_run, tables) -> dict[str, Figure]:
     name, ind, steps, rows = run.name, run.indentor, run.steps, tables["steps"]
     sweep = len({tuple(o) for o, _ in steps}) > 1
     key = "offset_x_mm" if sweep and any(rows["offset_x_mm"]) else ("offset_z_mm" if sweep else "depth_mm")
+    key = "time_s" if "time_s" in rows else key
     dim = scene_run.model.dim
     if len(steps) > 1:                    # one indentation: its values are in the profile and summary
         figures[f"{name}_force.png"] = indent_force_figure(name, key, rows[key], rows["force_N"],
@@ -169,6 +170,46 @@ def indent_figures(run, scene_run, tables) -> dict[str, Figure]:
 
 
 # --------------------------------------------------------------------------- biomechanics
+CLASS_COLOURS = {"SA1": "tab:green", "RA": "tab:blue", "PC": "tab:orange"}
+
+
+def afferent_figures(name: str, resp, depth_mm, time_label: str = "depth, mm") -> dict[str, Figure]:
+    """{file name: Figure} of a traced experiment's afferents (fem.afferents.PopulationResponse):
+    <name>/raster.png (the course, the spikes of every afferent by class and position, and the
+    population rate per class in 20 ms bins) and <name>/rate_map.png (mean rate of each afferent at
+    its site on the pad, one panel per class). depth_mm (k,): depth reached at each sample time."""
+    pop, t = resp.population, resp.times_s
+    cls = pop.afferent_class.astype(str)
+    classes = [c for c in CLASS_COLOURS if c in set(cls)]
+    order = np.lexsort((pop.site_mm[:, 0], pop.site_mm[:, 2], [classes.index(c) for c in cls]))
+    fig = Figure(figsize=(9, 7))
+    ax = fig.subplots(3, 1, sharex=True, height_ratios=(1, 3, 1.4))
+    ax[0].plot(t, depth_mm, "k-")
+    ax[0].set(ylabel=time_label, title=f"{name}: {len(pop)} afferents")
+    for row, i in enumerate(order):
+        if len(resp.spikes[i]):
+            ax[1].plot(resp.spikes[i], np.full(len(resp.spikes[i]), row), "|", ms=3, color=CLASS_COLOURS[cls[i]])
+    ax[1].set(ylabel="afferent (by class, z, x)", ylim=(-1, len(pop)))
+    bins = np.arange(0.0, t[-1] + 0.02, 0.02)
+    for c in classes:
+        sel = np.flatnonzero(cls == c)
+        all_spikes = np.concatenate([resp.spikes[i] for i in sel]) if sel.size else np.zeros(0)
+        h, _ = np.histogram(all_spikes, bins)
+        ax[2].step(bins[:-1], h / (0.02 * max(sel.size, 1)), where="post", color=CLASS_COLOURS[c], label=c)
+    ax[2].set(xlabel="time, s", ylabel="mean rate, Hz")
+    ax[2].legend(fontsize="small")
+    rate = resp.rates_hz()
+    mfig = Figure(figsize=(4.5 * len(classes), 4), layout="constrained")      # set before the colour bars
+    maxes = np.atleast_1d(mfig.subplots(1, len(classes), squeeze=False)[0])
+    for a, c in zip(maxes, classes):
+        sel = cls == c
+        sc = a.scatter(pop.site_mm[sel, 0], pop.site_mm[sel, 2], c=rate[sel], s=14, cmap="viridis",
+                       vmin=0, vmax=max(rate[sel].max(), 1e-9))
+        a.set(xlabel="x, mm", ylabel="z, mm", title=f"{c}: mean rate over {t[-1]:.2f} s", aspect="equal")
+        mfig.colorbar(sc, ax=a, label="Hz")
+    return {f"{name}/raster.png": fig, f"{name}/rate_map.png": mfig}
+
+
 def _profile_pair(title: str):
     """(Figure, [linear axes, log-distance axes]) for deflection profiles against distance."""
     fig = Figure(figsize=(11, 4))

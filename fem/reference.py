@@ -266,3 +266,45 @@ def beam_deflection(x_mm, d0_mm, Lb_mm):
     (thesis eq. 6.2): delta = d0 [0.5 (x/Lb)^3 - 1.5 (x/Lb) + 1] for |x| <= Lb, 0 beyond [mm]."""
     s = np.abs(np.asarray(x_mm, dtype=float)) / Lb_mm
     return np.where(s <= 1.0, d0_mm * (0.5 * s**3 - 1.5 * s + 1), 0.0)
+
+
+# --------------------------------------------------------------------------- flat punch (Sneddon 1946)
+def sneddon_punch_force_N(radius_mm, depth_mm, E_MPa, nu):
+    """Rigid flat circular punch of radius a pushed depth d into an elastic half-space:
+    P = 2 a E d / (1 - nu^2) [N] (Sneddon 1946; Johnson 1985, chapter 3). The contact
+    pressure is P / (2 pi a sqrt(a^2 - r^2)), singular at the punch edge."""
+    return 2.0 * np.asarray(radius_mm, float) * E_MPa * np.asarray(depth_mm, float) / (1.0 - nu * nu)
+
+
+def sneddon_punch_stress_zz_MPa(r_mm, z_mm, radius_mm, force_N):
+    """Vertical (normal to the surface) stress under a rigid flat circular punch of radius a
+    carrying force P, at distance r from the axis and depth z >= 0 [MPa], compression positive
+    (Sneddon 1946, as TouchSim's `circ_load_vert_stress`):
+
+        xi = z / a, rho = r / a, R = sqrt((rho^2 + xi^2 - 1)^2 + 4 xi^2),
+        theta = arctan(1 / xi), phi = arctan2(2 xi, rho^2 + xi^2 - 1),
+        J01 = sin(phi / 2) / sqrt(R),  J02 = sqrt(1 + xi^2) sin(3 phi / 2 - theta) / R^1.5,
+        sigma_z = P / (2 pi a^2) (J01 + xi J02).
+
+    On the axis this is P / (2 pi a^2) (1 + 3 xi^2) / (1 + xi^2)^2 (it tends to the punch pressure
+    P / (2 pi a^2) at the surface and to Boussinesq's 3 P / (2 pi z^2) at depth). At z = 0 it is
+    the contact pressure under the punch (inf on its edge) and 0 outside. Vectorised over r, z
+    (broadcast); in the project's axes (surface y = 0, body y < 0) it is -sigma_yy at depth z = -y."""
+    a = float(radius_mm)
+    xi = np.asarray(z_mm, float) / a
+    rho = np.asarray(r_mm, float) / a
+    if np.any(xi < 0) or np.any(rho < 0):
+        raise ValueError("r and z must be >= 0 (z is the depth below the surface)")
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = rho**2 + xi**2 - 1.0
+        R = np.sqrt(s**2 + 4.0 * xi**2)
+        theta = np.arctan2(1.0, xi)                     # arctan(1 / xi), pi / 2 at the surface
+        phi = np.arctan2(2.0 * xi, s)
+        J01 = np.sin(phi / 2.0) / np.sqrt(R)
+        J02 = np.sqrt(1.0 + xi**2) * np.sin(1.5 * phi - theta) / R**1.5
+        out = force_N / (2.0 * np.pi * a * a) * (J01 + xi * J02)
+        surface = (xi == 0) & (rho != 1)                  # xi J02 -> 0; phi = pi inside (also for z = -0.0)
+        if np.any(surface):
+            inside = force_N / (2.0 * np.pi * a * a) / np.sqrt(np.abs(1.0 - rho**2))
+            out = np.where(surface, np.where(rho < 1, inside, 0.0), out)
+    return np.where((xi == 0) & (rho == 1), np.inf, out)

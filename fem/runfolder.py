@@ -47,6 +47,8 @@ def experiment_record(run) -> dict:
                    "max_depth_mm": loads[0]["max_depth_mm"]}
     else:
         loading = {"depth_mm": [d["depth_mm"] for d in loads]}
+    if exp.trace is not None:
+        loading["trace"] = {**asdict(exp.trace), "times_s": exp.times_s.tolist()}
     offsets = exp.offsets_mm
     axis = None if exp.sweep is None else exp.sweep[0]
     return {"name": exp.name, "indentor": exp.indentor, "shapes": shapes,
@@ -55,7 +57,7 @@ def experiment_record(run) -> dict:
             "incline_deg": place.get("incline_deg"), "approach": ind.approach.tolist(),
             "length_axis": ind.e1.tolist(), "origin_mm": ind.origin_mm.tolist(),
             "sweep": None if axis is None else {"axis": "xyz"[axis], "offsets_mm": offsets[:, axis].tolist()},
-            "loading": loading, "indentations": len(offsets) * len(loads),
+            "loading": loading, "indentations": len(exp.indentations),
             "files": [f"{exp.name}.csv", f"{exp.name}_surface.csv", f"{exp.name}_receptors.csv"]}
 
 
@@ -88,6 +90,52 @@ def run_record(model_dir, scene_run) -> dict:
             "experiments": [experiment_record(e) for e in scene_run.experiments]}
 
 
+def afferents_record(population, responses) -> dict | None:
+    """run.json entry of a scene's afferents (fem.afferents): counts per class and the files of
+    each traced experiment; None without afferents."""
+    if population is None:
+        return None
+    names, counts = np.unique(population.afferent_class.astype(str), return_counts=True)
+    return {"counts": {str(k): int(c) for k, c in zip(names, counts)},
+            "experiments": {name: [f"{name}/{f}" for f in AFFERENT_FILES] for name in responses}}
+
+
+AFFERENT_FILES = ("afferents.csv", "spikes.csv", "inputs.csv")
+"""Files of a traced experiment's afferents, in the folder <experiment name>/ (`write_afferents`)."""
+
+
+def afferent_tables(resp) -> dict:
+    """{"afferents", "spikes", "inputs": {column: values}} of a fem.afferents.PopulationResponse:
+    one row per afferent (site, depth, spike count, mean rate over the course), per spike, and per
+    afferent and sample time (static input, surface deflection)."""
+    pop = resp.population
+    n, k = len(pop), len(resp.times_s)
+    site = pop.site_mm
+    counts = np.array([len(s) for s in resp.spikes])
+    who = np.repeat(np.arange(n), counts)
+    rate = resp.rates_hz()
+    cls = pop.afferent_class.astype(str)
+    afferents = {"afferent_id": np.arange(n), "class": cls, "model_index": pop.model_index,
+                 "x_mm": site[:, 0], "y_mm": site[:, 1], "z_mm": site[:, 2], "depth_mm": pop.depth_mm,
+                 "spikes": counts, "rate_hz": rate, "peak_input": resp.static.max(axis=1)}
+    spikes = {"afferent_id": who, "class": cls[who], "x_mm": site[who, 0], "y_mm": site[who, 1],
+              "z_mm": site[who, 2], "depth_mm": pop.depth_mm[who],
+              "time_s": np.concatenate(resp.spikes) if n else np.zeros(0)}
+    inputs = {"afferent_id": np.repeat(np.arange(n), k), "time_s": np.tile(resp.times_s, n),
+              "input": resp.static.ravel(), "deflection_mm": resp.deflection_mm.ravel()}
+    return {"afferents": afferents, "spikes": spikes, "inputs": inputs}
+
+
+def write_afferents(folder, resp) -> dict:
+    """AFFERENT_FILES of one traced experiment into `folder` (created); returns its tables."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    tables = afferent_tables(resp)
+    for name, file in zip(("afferents", "spikes", "inputs"), AFFERENT_FILES):
+        write_csv(folder / file, tables[name])
+    return tables
+
+
 # --------------------------------------------------------------------------- writer
 PVD_DEFAULT_MAX = 20
 """An experiment writes a PVD series by default when it has at most this many indentations."""
@@ -99,20 +147,28 @@ def writes_pvd(output, indentations: int) -> bool:
     return bool(output.pvd) if output.pvd is not None else indentations <= PVD_DEFAULT_MAX
 
 
-def write_run(folder, model_dir, scene_run) -> dict[str, dict]:
-    """Every experiment's CSVs (and PVD series) and run.json into `folder` (an existing, usually
-    staged, folder). Returns {experiment name: its tables (`run_tables`)} for the plots."""
+def write_run(folder, model_dir, scene_run, afferents=(None, {})) -> dict[str, dict]:
+    """Every experiment's CSVs (and PVD series), its afferents' (`write_afferents`, from
+    afferents = (population, {experiment name: response}) of fem.afferents.scene_responses) and
+    run.json into `folder` (an existing, usually staged, folder). Returns {experiment name: its
+    tables (`run_tables`, with "afferents": `afferent_tables` for a traced experiment)} for the plots."""
     folder = Path(folder)
     out = scene_run.scene.output
+    population, responses = afferents
     written = {}
     for run in scene_run.experiments:
         tables = written[run.name] = run_tables(run, scene_run)
         write_csv(folder / f"{run.name}.csv", tables["steps"])
         write_csv(folder / f"{run.name}_surface.csv", tables["surface"])
         write_csv(folder / f"{run.name}_receptors.csv", tables["receptors"])
+        if run.name in responses:
+            tables["afferents"] = write_afferents(folder / run.name, responses[run.name])
         if writes_pvd(out, len(run.steps)):
             _write_pvd(folder, run, scene_run)
-    write_json(folder / "run.json", run_record(model_dir, scene_run))
+    record = run_record(model_dir, scene_run)
+    if population is not None:
+        record["afferents"] = afferents_record(population, responses)
+    write_json(folder / "run.json", record)
     return written
 
 
@@ -136,7 +192,8 @@ def run_tables(run, scene_run) -> dict:
     sn, sampler, measures, dim = scene_run.surface, scene_run.sampler, scene_run.measures, scene_run.model.dim
     ind, steps = run.indentor, run.steps
     x3 = pad3(sn.x)
-    rows = [{"step": i, "offset_x_mm": off[0], "offset_z_mm": off[2],
+    times = run.experiment.times_s
+    rows = [{"step": i, **({} if times is None else {"time_s": float(times[i])}), "offset_x_mm": off[0], "offset_z_mm": off[2],
              "depth_mm": float(r.depth_mm.max()), "force_N": r.total_force_N,
              **{f"force_part{k}_N": f for k, f in enumerate(r.part_force_N) if len(r.depth_mm) > 1},
              "contact_area_mm2": r.contact_area_mm2, "contact_width_mm": _width_mm(r, ind, x3, dim),

@@ -1,6 +1,6 @@
 """The scene: indentation experiments on one model folder, as a TOML file or command-line flags.
 
-    material = "m43338"                  # optional: material code (default: the model's)
+    material = "m43338"                  # optional: material code or [E1, E2, ...] MPa (default: the model's)
     nu = 0.48                            # optional: Poisson ratio (default: the model's)
     [receptors]                          # optional
     depths_mm = [0.5, 0.75, 1.0]         # or "0.5:1:0.25", "0.5,1", 0.75
@@ -18,6 +18,15 @@
     incline_deg = -30                    # or approach = [0, -1, 0]; default: the model's support
     depth_mm = "0.5:3:0.5"               # or force_N = 0.02 (+ equal_force, max_depth_mm)
     sweep = "x=-3:3:0.1"                 # optional: move the indentor along x or z (mm)
+    [experiment.trace]                   # optional: a time course of the depth (or force)
+    shape = "ramp_hold"                  # ramp_hold, sine, steps, table, scan (fem.traces)
+    ramp_s = 0.1
+    hold_s = 0.5
+    release_s = 0.1
+    samples = 100
+    [afferents]                          # optional, with traced experiments: spiking afferents
+    classes = ["SA1", "RA"]              # fem.transduction classes
+    seed = 0
 
 Every key is declared once, below, with its type, unit and default (`Scene`, `Receptors`,
 `Output`, `Experiment`); unknown keys and wrong types are one-line InputErrors.
@@ -97,6 +106,29 @@ def _values(value, key, where):
         raise
     except (TypeError, ValueError):
         raise _bad(key, where, "numbers", value) from None
+
+
+def _material(value, key, where):
+    """A material code ("m43338") or Young's moduli per layer [MPa] (a list, layers 1, 2, ...)."""
+    if isinstance(value, str):
+        return value
+    if (isinstance(value, (list, tuple)) and value
+            and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)):
+        return tuple(float(v) for v in value)
+    raise _bad(key, where, 'a material code ("m43338") or moduli per layer in MPa ([0.01, 0.001, ...])', value)
+
+
+def _count(value, key, where):
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise _bad(key, where, "a whole number", value)
+    return value
+
+
+def _densities(value, key, where):
+    if not isinstance(value, dict) or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                              for v in value.values()):
+        raise _bad(key, where, "a table of class = afferents per cm^2, e.g. {SA1 = 70, RA = 140}", value)
+    return tuple((str(k), float(v)) for k, v in value.items())
 
 
 def _names(value, key, where):
@@ -221,6 +253,64 @@ class Output:
 
 
 @dataclass(frozen=True)
+class Trace:
+    """[experiment.trace]: the time course of an experiment's depth (or force), as fractions of it
+    over time (`fem.traces.fractions`); each sample is one quasi-static indentation."""
+    shape: str = _key("", _text, "ramp_hold", "ramp_hold, sine, steps, table or scan")
+    samples: int = _key("", _count, 100, "sample times (sine, ramp_hold, steps, table)")
+    ramp_s: float = _key("s", _number, 0.1, "ramp time (ramp_hold, steps)")
+    hold_s: float = _key("s", _number, 0.5, "hold time (ramp_hold, steps: per level)")
+    release_s: float = _key("s", _number, 0.1, "release time (ramp_hold)")
+    rest_s: float = _key("s", _number, 0.0, "time at rest after the release (ramp_hold)")
+    frequency_hz: float = _key("Hz", _number, 0.0, "sine frequency (at most fem.traces.QUASI_STATIC_HZ)")
+    cycles: float = _key("", _number, 1.0, "sine periods")
+    levels: tuple = _key("", _values, tuple, "fractions of the depth (steps, table)")
+    times_s: tuple = _key("s", _values, tuple, "sample times of the levels (table)")
+    speed_mm_s: float = _key("mm/s", _number, 0.0, "speed along the sweep (scan)")
+
+    @classmethod
+    def from_dict(cls, table, where: str) -> Trace:
+        from fem.traces import check
+
+        trace = cls(**_parse_table(cls, table, f"{where} trace"))
+        check(trace, where)
+        return trace
+
+
+@dataclass(frozen=True)
+class Afferents:
+    """[afferents]: spiking afferents over the pad (fem.afferents), driven by the traced experiments."""
+    classes: tuple = _key("", _names, lambda: ("SA1", "RA"), "afferent classes (fem.transduction.CLASSES)")
+    density_per_cm2: tuple | None = _key("1/cm^2", _densities, None,
+                                         "per class (default: the fingertip densities of fem.transduction)")
+    radius_mm: float | None = _key("mm", _number, None, "only sites this close to where the first traced "
+                                                       "experiment touches first (default: the whole pad)")
+    input: str = _key("", _text, "stress", "stress (normal stress at the afferent, compression +) or sed")
+    gain: float = _key("", _number, 1.0, "factor on the input (the published parameters are fit to stress in MPa)")
+    noisy: bool = _key("", _boolean, True, "membrane noise of the published model (seeded)")
+    seed: int = _key("", _count, 0, "seed of the placement and the noise")
+
+    @classmethod
+    def from_dict(cls, table) -> Afferents:
+        from fem.transduction import class_data
+
+        kw = _parse_table(cls, table, "[afferents]")
+        for name in kw.get("classes", ()):
+            class_data(name)
+        for name, dens in kw.get("density_per_cm2") or ():
+            if name not in kw.get("classes", ("SA1", "RA")):
+                raise InputError(f"[afferents] density_per_cm2 names {name}, not one of the classes")
+            _finite(dens, f"density_per_cm2 {name}", "[afferents]", 0.0, strict=True)
+        if kw.get("input", "stress") not in ("stress", "sed"):
+            raise InputError(f"[afferents] input must be stress or sed, got {kw['input']!r}")
+        if "radius_mm" in kw:
+            _finite(kw["radius_mm"], "radius_mm", "[afferents]", 0.0, strict=True)
+        if "gain" in kw:
+            _finite(kw["gain"], "gain", "[afferents]", 0.0, strict=True)
+        return cls(**kw)
+
+
+@dataclass(frozen=True)
 class Experiment:
     """[[experiment]]: one indentor, placed, at depths or a force, possibly swept."""
     name: str = _key("", _text, None, "file stem of its outputs (default experiment<k>)")
@@ -235,11 +325,12 @@ class Experiment:
     equal_force: bool = _key("", _boolean, False, "with force_N: every part carries force_N")
     max_depth_mm: float = _key("mm", _number, MAX_DEPTH_MM, "depth limit of force control")
     sweep: tuple | None = _key("axis=start:stop:step mm", _sweep, None, "(axis index, offsets mm) of the sweep")
+    trace: Trace | None = _key("", None, None, "[experiment.trace]: time course of the depth or force")  # noqa: RUF009
 
     @classmethod
     def from_dict(cls, table, k: int = 0) -> Experiment:
         """The k-th (0-based) [[experiment]] table."""
-        kw = _parse_table(cls, table, "[[experiment]]")
+        kw = _parse_table(cls, table, "[[experiment]]", trace=None)
         kw.setdefault("name", f"experiment{k + 1}")
         if "indentor" not in kw:
             raise InputError(f"experiment '{kw['name']}': give its indentor (a fem.indentors code)")
@@ -252,6 +343,14 @@ class Experiment:
                                  ("max_depth_mm", 0.0, True), ("incline_deg", None, False)):
             if key in kw:
                 _finite(kw[key], key, where, low, strict)
+        if "trace" in table:
+            kw["trace"] = Trace.from_dict(table["trace"], where)
+            if len(kw.get("depth_mm") or (0,)) != 1:
+                raise InputError(f"{where}: a traced experiment takes one depth_mm (its full depth), "
+                                 f"got {list(kw['depth_mm'])}")
+            if (kw["trace"].shape == "scan") != ("sweep" in kw):
+                raise InputError(f'{where}: a "scan" trace needs a sweep, and a sweep with a trace '
+                                 f'needs shape = "scan"')
         return cls(**kw)
 
     def check_dim(self, dim: int) -> None:
@@ -271,6 +370,36 @@ class Experiment:
         return [{"force_N": self.force_N, "equal_force": self.equal_force, "max_depth_mm": self.max_depth_mm}]
 
     @property
+    def indentations(self) -> list[tuple[np.ndarray, dict]]:
+        """[(offset (3,) mm, keyword arguments of ContactModel.indent)] in order: every offset at
+        every load, or one per sample time of the trace (a zero fraction: depth 0)."""
+        if self.trace is None:
+            return [(off, load) for off in self.offsets_mm for load in self.loads]
+        from fem.traces import fractions
+
+        offsets = self.offsets_mm
+        _, frac = fractions(self.trace, offsets if self.sweep is not None else None)
+        offsets = offsets if self.sweep is not None else np.zeros((len(frac), 3))
+        full = self.loads[0]
+
+        def load(f):
+            if f <= 0:
+                return {"depth_mm": 0.0}
+            if self.force_N is None:
+                return {"depth_mm": float(f * full["depth_mm"])}
+            return {**full, "force_N": float(f * full["force_N"])}
+        return [(off, load(f)) for off, f in zip(offsets, frac)]
+
+    @property
+    def times_s(self) -> np.ndarray | None:
+        """(n,) sample times of the trace [s] (None without one), one per `indentations` entry."""
+        if self.trace is None:
+            return None
+        from fem.traces import fractions
+
+        return fractions(self.trace, self.offsets_mm if self.sweep is not None else None)[0]
+
+    @property
     def offsets_mm(self) -> np.ndarray:
         """(k, 3) indentor offsets of the sweep (one zero row without a sweep)."""
         if self.sweep is None:
@@ -285,10 +414,12 @@ class Experiment:
 class Scene:
     """A scene: material overrides, receptors, outputs and the experiments, in order."""
     experiments: tuple = _key("", None, tuple, "[[experiment]] tables", toml="experiment")
-    material: str | None = _key("", _text, None, "material code or moduli (default: the model's)")
+    material: str | tuple | None = _key("", _material, None, "material code, or moduli per layer in MPa "
+                                                           "(default: the model's)")
     nu: float | None = _key("", _number, None, "Poisson ratio (default: the model's)")
     receptors: Receptors = _key("", lambda v, key, where: Receptors.from_dict(v), Receptors, "[receptors]")  # noqa: RUF009
     output: Output = _key("", lambda v, key, where: Output.from_dict(v), Output, "[output]")  # noqa: RUF009
+    afferents: Afferents | None = _key("", lambda v, key, where: Afferents.from_dict(v), None, "[afferents]")  # noqa: RUF009
 
     @classmethod
     def from_dict(cls, d, source: str = "scene") -> Scene:
@@ -301,12 +432,19 @@ class Scene:
             raise InputError("scene experiment: expected [[experiment]] tables")
         if "material" in kw or "nu" in kw:
             Material(kw.get("material", "m33338"), kw.get("nu", 0.48))      # the code's form and nu's range
-        return cls(experiments=tuple(Experiment.from_dict(t, k) for k, t in enumerate(tables)), **kw)
+        experiments = tuple(Experiment.from_dict(t, k) for k, t in enumerate(tables))
+        if kw.get("afferents") is not None and not any(e.trace is not None for e in experiments):
+            raise InputError(f"{source}: [afferents] spike over time; give an experiment a time course "
+                             f"([experiment.trace], e.g. shape = \"ramp_hold\")")
+        return cls(experiments=experiments, **kw)
 
     def check_dim(self, dim: int) -> None:
         """Raise InputError if an experiment cannot run on a model of `dim` (`Experiment.check_dim`)."""
         for exp in self.experiments:
             exp.check_dim(dim)
+        if self.afferents is not None and dim != 3:
+            raise InputError("[afferents] lie over a pad: they need a 3D model (mesh a preset or a "
+                             "reconstruction in 3D); a 2D section has no pad area")
 
 
 def load_scene(path) -> Scene:
