@@ -142,3 +142,26 @@ def test_trace_shapes_and_refusals():
     for d in bad:
         with pytest.raises(InputError):
             Scene.from_dict(d)
+
+
+def test_steps_table_and_scan_courses():
+    """steps: each level reached by a ramp and held; table: as given, resampled; scan: one sample
+    per sweep offset at the full depth, times = distance / speed."""
+    steps = Scene.from_dict({"experiment": [{"indentor": "punch:2", "depth_mm": 2.0, "trace": {
+        "shape": "steps", "levels": [0.25, 0.5], "ramp_s": 0.05, "hold_s": 0.2, "samples": 50}}]}).experiments[0]
+    t, f = fractions(steps.trace)
+    assert t[-1] == pytest.approx(3 * 0.25) and f[np.argmin(np.abs(t - 0.2))] == pytest.approx(0.25)
+    assert f[np.argmin(np.abs(t - 0.45))] == pytest.approx(0.5) and f[-1] == 0
+    assert max(load["depth_mm"] for _, load in steps.indentations) == pytest.approx(1.0)
+    table = Scene.from_dict({"experiment": [{"indentor": "punch:2", "depth_mm": 1.0, "trace": {
+        "shape": "table", "times_s": [0, 0.2, 0.4], "levels": [0, 1, 0.5], "samples": 5}}]}).experiments[0]
+    t, f = fractions(table.trace)
+    assert np.interp(0.3, t, f) == pytest.approx(0.75) and f[-1] == 0.5
+    scan = Scene.from_dict({"experiment": [{"indentor": "punch:2", "depth_mm": 0.5, "sweep": "x=-2:2:0.5",
+                                            "trace": {"shape": "scan", "speed_mm_s": 10.0}}]}).experiments[0]
+    offsets = [off[0] for off, _ in scan.indentations]
+    assert offsets == pytest.approx(np.arange(-2, 2.01, 0.5))
+    assert scan.times_s == pytest.approx(np.arange(9) * 0.05)
+    assert all(load["depth_mm"] == 0.5 for _, load in scan.indentations)
+    with pytest.raises(InputError, match="sweep"):
+        Scene.from_dict({"experiment": [{"indentor": "punch:2", "depth_mm": 0.5, "trace": {"shape": "scan", "speed_mm_s": 1}}]})
