@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from common.errors import InputError
-from fem.biomech import DeflectionExperiment, Profile, as_log10, code_of, parse_code
+from fem.biomech import DeflectionExperiment, Profile, as_log10, code_of, parse_code, ratio_key
 
 
 @dataclass
@@ -68,9 +68,14 @@ def fit_material(exp: DeflectionExperiment, data: list[Profile], base: str = "m4
 
     Bounded trust-region least squares (scipy `least_squares`, method 'trf') on the deflection
     residuals at the data distances; forward-difference Jacobian in log10 space (step_log10),
-    each point one model solve (cached by ratios; the Jacobian's columns and the integer
-    roundings are solved as one batch each, in parallel when `exp` has a map). noise_mm: known
-    measurement noise (else estimated from the residuals) for the uncertainty.
+    each point one model solve (cached by ratios). When `exp` has a map (workers), every trial
+    point is solved in one batch with the Jacobian columns around it, which the optimizer asks
+    for next if it accepts the point (speculation: a rejected point wastes its columns, solved
+    alongside), so an iteration is one round of 1 + p solves on the workers instead of a trial
+    solve followed by p columns; the integer roundings are one batch. The fit's path and numbers
+    do not depend on the map. `evaluations` counts the distinct materials the fit used (not the
+    speculative ones). noise_mm: known measurement noise (else estimated from the residuals) for
+    the uncertainty.
     """
     from scipy.optimize import least_squares
 
@@ -94,20 +99,30 @@ def fit_material(exp: DeflectionExperiment, data: list[Profile], base: str = "m4
         v[idx] = x
         return v
 
+    used = set()                        # ratio keys of the materials the fit asked for
+
+    def residuals(v):
+        used.add(ratio_key(v))
+        return profile_residuals(exp, v, data)
+
+    def columns(x):
+        """(steps, points) of the forward-difference Jacobian at x (a step down at the upper bound)."""
+        steps = [step_log10 if v + step_log10 <= hi else -step_log10 for v in x]
+        shifted = [x + h * np.eye(len(x))[j] for j, h in enumerate(steps)]
+        return steps, shifted
+
     def fun(x):
-        return profile_residuals(exp, full(x), data)
+        if exp.map is not None:         # the trial point with its columns, in parallel
+            exp.evaluate([full(x)] + [full(xp) for xp in columns(x)[1]], depths)
+        return residuals(full(x))
 
     def jac(x):
-        steps = [step_log10 if v + step_log10 <= hi else -step_log10 for v in x]
-        shifted = []
-        for j, h in enumerate(steps):
-            shifted.append(x.copy())
-            shifted[-1][j] += h
+        steps, shifted = columns(x)
         exp.evaluate([full(x)] + [full(xp) for xp in shifted], depths)     # the columns in parallel
-        r0 = fun(x)
+        r0 = residuals(full(x))
         J = np.empty((len(r0), len(x)))
         for j, (h, xp) in enumerate(zip(steps, shifted)):
-            J[:, j] = (fun(xp) - r0) / h
+            J[:, j] = (residuals(full(xp)) - r0) / h
         return J
 
     sol = least_squares(fun, x0, jac=jac, bounds=(np.full(len(idx), lo), np.full(len(idx), hi)),
@@ -131,11 +146,11 @@ def fit_material(exp: DeflectionExperiment, data: list[Profile], base: str = "m4
     for v in roundings:
         code = code_of(v)
         if code not in codes:
-            rr = profile_residuals(exp, v, data)
+            rr = residuals(v)
             codes[code] = float(np.sqrt(np.mean(rr ** 2)))
     best = min(codes, key=codes.get)
     return MaterialFit(full(sol.x), free, float(np.sqrt(np.mean(r ** 2))), r, std, 10.0 ** std, sens,
-                       corr, best, codes[best], codes, exp.evaluations, int(sol.nfev), sol.message)
+                       corr, best, codes[best], codes, len(used), int(sol.nfev), sol.message)
 
 
 @dataclass
