@@ -205,7 +205,7 @@ class DeflectionExperiment:
         for d in depths_mm:
             d = float(d)
             if d not in entry["depth"]:
-                entry["depth"][d] = self._solver(key, entry["log10_Pa"]).indent(self.indentor, depth_mm=d)
+                entry["depth"][d] = _detached(self._solver(key, entry["log10_Pa"]).indent(self.indentor, depth_mm=d))
             out.append((entry["depth"][d], scale))
         return out
 
@@ -237,11 +237,7 @@ class DeflectionExperiment:
         caches for a material it has not seen, picklable (no link back to the factorisation).
         The cache is neither read nor filled."""
         cm = self._factorise(np.asarray(log10_Pa, float))
-        out = [cm.indent(self.indentor, depth_mm=float(d)) for d in depths_mm]
-        for res in out:
-            res.deflection_mm            # noqa: B018 - observes the pending indentations, as profiles does
-            res._source = None
-        return out
+        return [_detached(cm.indent(self.indentor, depth_mm=float(d))) for d in depths_mm]
 
     def evaluate(self, materials, depths_mm) -> None:
         """Solve the materials (codes or (5,) log10 moduli in Pa) whose modulus ratios are not
@@ -391,6 +387,14 @@ class LayerStudy:
     layers: dict = field(default_factory=dict)        # layer -> [codes, softest first]
     effects: list = field(default_factory=list)       # [LayerEffect]
     evaluations: int = 0
+
+
+def _detached(res):
+    """A contact result observed now and cut from its contact model, so that a cached result does
+    not keep the model's factorisation alive (a 3D one is about 0.9 GB) after it is dropped."""
+    res.deflection_mm            # noqa: B018 - observes the pending indentations
+    res._source = None
+    return res
 
 
 def layer_study(exp: DeflectionExperiment, base: str = "m43338", layers=(1, 2, 3, 4),
