@@ -22,6 +22,8 @@ one material the contact compliance columns are reused across depths (fem.contac
 """
 from __future__ import annotations
 
+import gc
+
 import functools
 from dataclasses import dataclass, field
 
@@ -215,6 +217,7 @@ class DeflectionExperiment:
             cm = self._factorise(log10_Pa)
             while len(self._solvers) >= self.max_factors:
                 self._solvers.pop(next(iter(self._solvers)))
+                gc.collect()        # a dropped model sits in reference cycles; its factors are GBs in 3D
         self._solvers[key] = cm
         return cm
 
@@ -237,7 +240,10 @@ class DeflectionExperiment:
         caches for a material it has not seen, picklable (no link back to the factorisation).
         The cache is neither read nor filled."""
         cm = self._factorise(np.asarray(log10_Pa, float))
-        return [_detached(cm.indent(self.indentor, depth_mm=float(d))) for d in depths_mm]
+        out = [_detached(cm.indent(self.indentor, depth_mm=float(d))) for d in depths_mm]
+        del cm
+        gc.collect()                # free the factorisation now, not at the next cyclic collection
+        return out
 
     def evaluate(self, materials, depths_mm) -> None:
         """Solve the materials (codes or (5,) log10 moduli in Pa) whose modulus ratios are not
