@@ -29,7 +29,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from fem.afferents import Population, respond, sampler_of, site_inputs
+from fem.afferents import Population, experiment_inputs, respond, sampler_of
 from fem.experiments import run_experiments
 from fem.findings import Workshop
 from fem.modelfolder import read_model
@@ -63,10 +63,7 @@ def main():
     k, both = len(line), np.r_[line, line]
     pop = Population(np.array(["SA1"] * k + ["RA"] * k, dtype=object), np.zeros(2 * k, int), both, sn.x[both],
                      sn.normal[both], np.r_[np.full(k, DEPTHS["SA1"]), np.full(k, DEPTHS["RA"])])
-    uniq = list({id(r): r for _, r in e.steps}.values())
-    col = [{id(r): j for j, r in enumerate(uniq)}[id(r)] for _, r in e.steps]
-    static = site_inputs(sampler_of(model, pop), pop, run.contact.compliance(e.indentor.approach), uniq)[:, col]
-    deflection = np.stack([r.deflection_mm[pop.candidate] for _, r in e.steps], axis=1)
+    static, deflection = experiment_inputs(sampler_of(model, pop), pop, run.contact, e)
     t = e.experiment.times_s
     finger = respond(pop, t, static, deflection, noisy=False)
 

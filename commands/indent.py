@@ -91,7 +91,7 @@ def indent_folder(model_dir, out_dir, scene: Scene, progress: bool = True, sched
                 for name, fig in plots.indent_figures(e, run, tables[e.name]).items():
                     plots.save(fig, tmp / name)
                 if e.name in afferents[1]:
-                    depth = [float(r.depth_mm.max()) for _, r in e.steps]
+                    depth = tables[e.name]["steps"]["depth_mm"]
                     for name, fig in plots.afferent_figures(e.name, afferents[1][e.name], depth).items():
                         plots.save(fig, tmp / name)
     total = time.perf_counter() - t_start

@@ -15,8 +15,8 @@ traced experiment (`fem.traces`) each afferent receives
 and `fem.transduction` turns both into spike trains.
 
     pop = place(model, surface, ("SA1", "RA"), seed=0)
-    inputs = site_inputs(model, pop, compliance, results)     # (n, k) static input per result
-    resp = respond(pop, times_s, inputs[:, step], deflection[:, step])
+    static, deflection = experiment_inputs(sampler_of(model, pop), pop, contact, run)   # (n, k) per step
+    resp = respond(pop, run.experiment.times_s, static, deflection)
     resp.spikes, resp.rates_hz(0.1, 0.6)
 """
 from __future__ import annotations
@@ -119,6 +119,17 @@ def site_inputs(sampler, population: Population, compliance, results, measure: s
     return out
 
 
+def experiment_inputs(sampler, population: Population, contact, run, measure: str = "stress"):
+    """(static (n, k), deflection_mm (n, k)) of a population at the k steps of an experiment run
+    (fem.experiments.ExperimentRun) on its contact model: the static input (`site_inputs`) of each
+    distinct contact result once (a hold repeats one), and the surface deflection above each afferent."""
+    unique = list({id(r): r for _, r in run.steps}.values())
+    column = {id(r): j for j, r in enumerate(unique)}
+    static = site_inputs(sampler, population, contact.compliance(run.indentor.approach), unique, measure)
+    deflection = np.stack([r.deflection_mm[population.candidate] for _, r in run.steps], axis=1)
+    return static[:, [column[id(r)] for _, r in run.steps]], deflection
+
+
 @dataclass
 class PopulationResponse:
     """Spike trains of a population through a time course: times_s (k,) sample times, static
@@ -173,10 +184,6 @@ def scene_responses(scene_run) -> tuple[Population | None, dict]:
         times = run.experiment.times_s
         if times is None:
             continue
-        unique = list({id(r): r for _, r in run.steps}.values())
-        column = {id(r): j for j, r in enumerate(unique)}
-        static = site_inputs(sampler, pop, scene_run.contact.compliance(run.indentor.approach), unique, cfg.input)
-        static = static[:, [column[id(r)] for _, r in run.steps]]
-        deflection = np.stack([r.deflection_mm[pop.candidate] for _, r in run.steps], axis=1)
+        static, deflection = experiment_inputs(sampler, pop, scene_run.contact, run, cfg.input)
         out[run.name] = respond(pop, times, static, deflection, cfg.gain, cfg.noisy, cfg.seed)
     return pop, out

@@ -22,15 +22,14 @@ one material the contact compliance columns are reused across depths (fem.contac
 """
 from __future__ import annotations
 
-import gc
-
 import functools
+import gc
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from common.errors import InputError
-from fem.materials import BONE_LAYER, FLUID_LAYER
+from fem.materials import FLUID_LAYER
 from fem.reference import beam_deflection, waterbed_deflection
 
 N_LAYERS = 5

@@ -169,11 +169,11 @@ def indent_figures(run, scene_run, tables) -> dict[str, Figure]:
     return figures
 
 
-# --------------------------------------------------------------------------- biomechanics
+# --------------------------------------------------------------------------- afferents
 CLASS_COLOURS = {"SA1": "tab:green", "RA": "tab:blue", "PC": "tab:orange"}
 
 
-def afferent_figures(name: str, resp, depth_mm, time_label: str = "depth, mm") -> dict[str, Figure]:
+def afferent_figures(name: str, resp, depth_mm) -> dict[str, Figure]:
     """{file name: Figure} of a traced experiment's afferents (fem.afferents.PopulationResponse):
     <name>/raster.png (the course, the spikes of every afferent by class and position, and the
     population rate per class in 20 ms bins) and <name>/rate_map.png (mean rate of each afferent at
@@ -185,22 +185,21 @@ def afferent_figures(name: str, resp, depth_mm, time_label: str = "depth, mm") -
     fig = Figure(figsize=(9, 7))
     ax = fig.subplots(3, 1, sharex=True, height_ratios=(1, 3, 1.4))
     ax[0].plot(t, depth_mm, "k-")
-    ax[0].set(ylabel=time_label, title=f"{name}: {len(pop)} afferents")
+    ax[0].set(ylabel="depth, mm", title=f"{name}: {len(pop)} afferents")
     for row, i in enumerate(order):
         if len(resp.spikes[i]):
             ax[1].plot(resp.spikes[i], np.full(len(resp.spikes[i]), row), "|", ms=3, color=CLASS_COLOURS[cls[i]])
     ax[1].set(ylabel="afferent (by class, z, x)", ylim=(-1, len(pop)))
     bins = np.arange(0.0, t[-1] + 0.02, 0.02)
     for c in classes:
-        sel = np.flatnonzero(cls == c)
-        all_spikes = np.concatenate([resp.spikes[i] for i in sel]) if sel.size else np.zeros(0)
-        h, _ = np.histogram(all_spikes, bins)
-        ax[2].step(bins[:-1], h / (0.02 * max(sel.size, 1)), where="post", color=CLASS_COLOURS[c], label=c)
+        sel = np.flatnonzero(cls == c)              # not empty: c is one of the population's classes
+        h, _ = np.histogram(np.concatenate([resp.spikes[i] for i in sel]), bins)
+        ax[2].step(bins[:-1], h / (0.02 * sel.size), where="post", color=CLASS_COLOURS[c], label=c)
     ax[2].set(xlabel="time, s", ylabel="mean rate, Hz")
     ax[2].legend(fontsize="small")
     rate = resp.rates_hz()
     mfig = Figure(figsize=(4.5 * len(classes), 4), layout="constrained")      # set before the colour bars
-    maxes = np.atleast_1d(mfig.subplots(1, len(classes), squeeze=False)[0])
+    maxes = mfig.subplots(1, len(classes), squeeze=False)[0]
     for a, c in zip(maxes, classes):
         sel = cls == c
         sc = a.scatter(pop.site_mm[sel, 0], pop.site_mm[sel, 2], c=rate[sel], s=14, cmap="viridis",
@@ -210,6 +209,7 @@ def afferent_figures(name: str, resp, depth_mm, time_label: str = "depth, mm") -
     return {f"{name}/raster.png": fig, f"{name}/rate_map.png": mfig}
 
 
+# --------------------------------------------------------------------------- biomechanics
 def _profile_pair(title: str):
     """(Figure, [linear axes, log-distance axes]) for deflection profiles against distance."""
     fig = Figure(figsize=(11, 4))

@@ -375,11 +375,7 @@ class Experiment:
         every load, or one per sample time of the trace (a zero fraction: depth 0)."""
         if self.trace is None:
             return [(off, load) for off in self.offsets_mm for load in self.loads]
-        from fem.traces import fractions
-
-        offsets = self.offsets_mm
-        _, frac = fractions(self.trace, offsets if self.sweep is not None else None)
-        offsets = offsets if self.sweep is not None else np.zeros((len(frac), 3))
+        _, offsets, frac = self._samples()
         full = self.loads[0]
 
         def load(f):
@@ -393,11 +389,15 @@ class Experiment:
     @property
     def times_s(self) -> np.ndarray | None:
         """(n,) sample times of the trace [s] (None without one), one per `indentations` entry."""
-        if self.trace is None:
-            return None
+        return None if self.trace is None else self._samples()[0]
+
+    def _samples(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(times (n,) s, offsets (n, 3) mm, fractions (n,)) of the trace's sample times."""
         from fem.traces import fractions
 
-        return fractions(self.trace, self.offsets_mm if self.sweep is not None else None)[0]
+        sweep = self.offsets_mm if self.sweep is not None else None
+        times, frac = fractions(self.trace, sweep)
+        return times, (sweep if sweep is not None else np.zeros((len(frac), 3))), frac
 
     @property
     def offsets_mm(self) -> np.ndarray:

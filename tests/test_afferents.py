@@ -10,7 +10,7 @@ import pytest
 
 import pipeline
 from common.errors import InputError
-from fem.afferents import Population, respond, sampler_of, site_inputs
+from fem.afferents import Population, experiment_inputs, respond, sampler_of
 from fem.experiments import run_experiments
 from fem.modelfolder import read_model
 from fem.scene import Scene, load_scene
@@ -79,12 +79,8 @@ def _drive(monkey, experiment: dict, population, zmid_position: float | None = N
         experiment = {**experiment, "position_mm": [zmid_position, zmid]}
     run = run_experiments(model, info, Scene.from_dict({"experiment": [experiment]}))
     e = run.experiments[0]
-    uniq = list({id(r): r for _, r in e.steps}.values())
-    col = {id(r): j for j, r in enumerate(uniq)}
-    static = site_inputs(sampler_of(model, population), population, run.contact.compliance(e.indentor.approach), uniq)
-    deflection = np.stack([r.deflection_mm[population.candidate] for _, r in e.steps], axis=1)
-    return respond(population, e.experiment.times_s, static[:, [col[id(r)] for _, r in e.steps]], deflection,
-                   noisy=False)
+    static, deflection = experiment_inputs(sampler_of(model, population), population, run.contact, e)
+    return respond(population, e.experiment.times_s, static, deflection, noisy=False)
 
 
 def test_rates_grow_with_depth(monkey):

@@ -71,5 +71,5 @@ def test_layer2_sense_turns_with_the_skin_thickness(shop):
     reasons = thesis3d.layer2_reasons(shop)
     assert reasons["2D section, nodal line"][0] == pytest.approx(-0.47, abs=0.05)
     assert reasons["2D section, nodal line, neo-Hookean"][0] == pytest.approx(-0.46, abs=0.05)
-    thin_near, thin_flips = reasons["2D section, skin 0.25 + 0.25 mm"]
+    thin_near, thin_flips = reasons[thesis3d.THIN_LABEL]
     assert thin_near == pytest.approx(0.26, abs=0.05) and thin_flips[-1] == pytest.approx(2.58, abs=0.2)
