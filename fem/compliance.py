@@ -134,27 +134,32 @@ class FactorCompliance(Compliance):
 
 class DenseReach:
     """Columns and blocks of a dense compliance C (k, k) over the candidates in `reach` (m,) bool;
-    the other candidates' rows are NaN (they cannot carry force). Mixed into a Compliance."""
+    the other candidates' rows are NaN (they cannot carry force). Mixed into a Compliance; the
+    rows of C come from `_rows` (C is symmetric, so a column is a row: contiguous memory, several
+    times faster to gather than columns or np.ix_ blocks of a large C)."""
 
-    def _dense(self, C, reach) -> None:
+    def _dense(self, reach, diagonal, C=None) -> None:
+        """reach (m,) bool, diagonal (k,) of C; C (k, k) unless `_rows` is overridden."""
         self.reach = np.asarray(reach, bool)
         self._C = C
         self._row = np.cumsum(self.reach) - 1                       # candidate -> row of C
         self.held = np.zeros(self.m, bool)
-        self.held[self.reach] = np.diag(C) == 0
+        self.held[self.reach] = np.asarray(diagonal) == 0
+
+    def _rows(self, rows) -> np.ndarray:
+        """(len(rows), k) rows of C."""
+        return self._C[rows]
 
     def columns(self, idx) -> np.ndarray:
-        idx = np.asarray(idx, int)
+        cols = self._rows(self._row[np.asarray(idx, int)]).T
         if self.reach.all():
-            return self._C[:, idx]
-        out = np.full((self.m, len(idx)), np.nan)
-        out[self.reach] = self._C[:, self._row[idx]]
+            return cols
+        out = np.full((self.m, cols.shape[1]), np.nan)
+        out[self.reach] = cols
         return out
 
     def block(self, rows, cols) -> np.ndarray:
-        """As Compliance.block; C is symmetric, so whole rows are gathered (contiguous memory,
-        several times faster than np.ix_ on a large block) and transposed (a view)."""
-        return self._C[self._row[np.asarray(cols, int)]][:, self._row[np.asarray(rows, int)]].T
+        return self._rows(self._row[np.asarray(cols, int)])[:, self._row[np.asarray(rows, int)]].T
 
 
 class CondensedCompliance(DenseReach, FactorCompliance):
@@ -173,7 +178,8 @@ class CondensedCompliance(DenseReach, FactorCompliance):
         reach = system.stored(nodes, direction)                     # the same for -direction
         if not reach.any():
             raise ValueError("no candidate has a stored compliance along this direction")
-        self._dense(system.compliance(np.asarray(nodes)[reach], direction), reach)
+        C = system.compliance(np.asarray(nodes)[reach], direction)
+        self._dense(reach, np.diag(C), C)
 
     def observed(self, idx) -> np.ndarray:
         raise NotImplementedError("a condensed compliance observes whole force vectors: use observe()")

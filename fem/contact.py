@@ -135,16 +135,28 @@ def solve_lcp(columns, q, start=None, tol_mm: float = GAP_TOL_MM, max_iter: int 
     n = len(q)
     active = (q < 0) if start is None else start.copy()
     best, backup = n + 1, 3
+    slot, held = np.full(n, -1), np.empty((n, 0), order="F")     # columns fetched so far
     for it in range(1, max_iter + 1):
         idx = np.flatnonzero(active)
         f = np.zeros(n)
         factor = None
         if idx.size:
-            cols = columns(idx)
+            new = idx[slot[idx] < 0]                # pivots change a few nodes: fetch only those
+            if new.size:
+                have = int(slot.max(initial=-1)) + 1
+                if have + new.size > held.shape[1]:
+                    grown = np.empty((n, max(2 * held.shape[1], have + new.size)), order="F")
+                    grown[:, :have] = held[:, :have]
+                    held = grown
+                held[:, have:have + new.size] = columns(new)
+                slot[new] = np.arange(have, have + new.size)
+            have = int(slot.max()) + 1
             with blas_threads(1 if idx.size < SERIAL_BLAS_BELOW else None):
-                factor = sla.cho_factor(cols[idx], lower=True)
+                factor = sla.cho_factor(held[np.ix_(idx, slot[idx])], lower=True)
                 f[idx] = sla.cho_solve(factor, -q[idx])
-            g = q + cols @ f[idx]
+            fs = np.zeros(have)                     # forces in fetched-column order
+            fs[slot[idx]] = f[idx]
+            g = q + held[:, :have] @ fs
         else:
             g = q.copy()
         ftol = 1e-12 * max(np.abs(f).max(), 1e-300)

@@ -4,20 +4,23 @@ model folder and reused by every later command with the same inputs.
 A response model belongs to one (mesh, material and nu, held regions, approach direction, receptor
 grid). Over the m contact candidates of the model's contact region (`fem.modelfolder.CONTACT_REGION`),
 k of which are condensed (`reach`: all when m <= CONDENSE_MAX_NODES, else the ones a scene's
-indentors can touch), it holds
+indentors can touch), it holds one row per condensed candidate j, the response to a unit force
+along the approach at j:
 
-- W (m, k) [mm/N]: the displacement along the approach of every candidate per unit force along it
-  at each condensed candidate; its `reach` rows are the compliance C (k, k) of the condensed ones,
-  from the Schur complement of the factorisation (no solves), the other rows from solves;
-- R (r, k): the receptor sampler's inputs (displacement, strain [-], stress [MPa] at the receptor
-  points, `ReceptorSampler.operator` rows) per unit force, R = O K^-1 B: the loads of B sit on
-  condensed rows, so each block of 64 columns is one backward substitution
+- WT (k, m) [mm/N]: the displacement along the approach of every candidate; its `reach` columns
+  are the compliance C (k, k) of the condensed ones, from the Schur complement of the
+  factorisation (no solves), the other columns from solves;
+- RT (k, r): the receptor sampler's inputs (displacement, strain [-], stress [MPa] at the receptor
+  points, `ReceptorSampler.operator` rows), R = O K^-1 B transposed: the loads of B sit on
+  condensed rows, so each block of 64 candidates is one backward substitution
   (`fem.system.LinearSystem.solve_condensed`); through the transposed system
-  R^T = B^T K^-1 O^T (full solves) when O has fewer rows than there are condensed candidates.
+  B^T K^-1 O^T (full solves) when O has fewer rows than there are condensed candidates.
 
-So a contact problem, its deflections and its receptor measures need no factorisation: the
-contact model of `contact_model` gives the forces, deflections and observations of the factorised
-path (`fem.contact.ContactModel.from_fe`) to round-off. Full displacement fields (a PVD) do need it.
+Rows are contiguous on disk, so a contact problem reads only the rows of the candidates that
+carry force (`StoredCompliance` keeps each row it has read). A contact problem, its deflections
+and its receptor measures need no factorisation: the contact model of `contact_model` gives the
+forces, deflections and observations of the factorised path (`fem.contact.ContactModel.from_fe`)
+to round-off. Full displacement fields (a PVD) do need it.
 
     store = ResponseStore("out/cyl8")                      # <model>/response/<key>/
     key = response_key(model, approach, grid, store.mesh_sha256())
@@ -25,8 +28,9 @@ path (`fem.contact.ContactModel.from_fe`) to round-off. Full displacement fields
     cm = contact_model(model, sn, {approach_key(approach): rm})   # fem.contact.ContactModel
     responses, sampler, used = stored_responses(store, model, approaches, grid, touched)   # all of it
 
-Files (docs/file-formats.md): W.npy, R.npy (float64, memory-mapped when read), reach.npy
-(m,) bool, and response.json (format, key, approach, shapes, receptor shifts, build seconds).
+Files (docs/file-formats.md): WT.npy, RT.npy (float64, memory-mapped when read), reach.npy
+(m,) bool, shift_mm.npy and response.json (format, key, approach, shapes, receptor shifts, build
+seconds).
 """
 from __future__ import annotations
 
@@ -47,7 +51,7 @@ from fem.compliance import Compliance, DenseReach
 from fem.contact import ContactModel, fe_facets
 from fem.modelfolder import CONDENSE_MAX_NODES, CONTACT_REGION, HELD, held_regions
 
-RESPONSE_FORMAT = 1
+RESPONSE_FORMAT = 2
 """Version of the stored layout and of what the key covers (raise it when either changes)."""
 BLOCK = 64
 """Right-hand sides per solve when R and W are built."""
@@ -89,21 +93,17 @@ def response_key(model, approach, grid, mesh_sha: str) -> str:
 # --------------------------------------------------------------------------- the model
 @dataclass
 class ResponseModel:
-    """W (m, k) mm/N, R (r, k) per N, reach (m,) bool (k True), approach (3,), receptor shifts
-    shift_mm (n,) (`ReceptorSampler.shift_mm`), its key, build seconds and bytes on disk."""
+    """WT (k, m) mm/N and RT (k, r) per N, one row per condensed candidate (module docstring),
+    reach (m,) bool (k True), approach (3,), receptor shifts shift_mm (n,)
+    (`ReceptorSampler.shift_mm`), its key, build seconds and bytes on disk."""
     key: str
     approach: np.ndarray
     reach: np.ndarray
-    W: np.ndarray
-    R: np.ndarray
+    WT: np.ndarray
+    RT: np.ndarray
     shift_mm: np.ndarray
     build_seconds: float = float("nan")
     nbytes: int = 0
-
-    @property
-    def C(self) -> np.ndarray:
-        """(k, k) compliance [mm/N] of the condensed candidates."""
-        return self.W if self.reach.all() else self.W[self.reach]
 
     def covers(self, candidates) -> bool:
         """Whether every candidate of the (m,) bool mask is condensed."""
@@ -133,21 +133,20 @@ def build_response(model, approach, sampler, key: str, candidates=None, progress
         system = model.system(held_regions(model), condense=(sn.nodes[candidates], a))
     reach = system.stored(sn.nodes, a)
     k = int(reach.sum())
-    C = system.compliance(sn.nodes[reach], a)
     B = sp.csc_matrix((np.tile(a[:model.dim], m), (sn.dofs.ravel(), np.repeat(np.arange(m), model.dim))),
                       shape=(model.ndof, m))
     O = sp.vstack([B[:, ~reach].T, sampler.operator]).tocsr()         # rows still to solve for
-    W = np.empty((m, k))
-    W[reach] = C
     with progress.task(f"response model: {min(k, O.shape[0])} solves for {O.shape[0] - (m - k)} receptor "
                        f"values and {m - k} other candidates"):
         if k <= O.shape[0]:                          # O K^-1 B: k loads on condensed unknowns
             out = _apply_condensed(system, sn.nodes[reach], a, O)
-        else:                                        # (B^T K^-1 O^T)^T: one solve per row of O
-            out = _apply_inverse(system, O.T.tocsc(), B[:, reach].T.tocsr()).T
-    W[~reach] = out[:m - k]
-    R = np.ascontiguousarray(out[m - k:])
-    return ResponseModel(key, a, reach, W, R, np.asarray(sampler.shift_mm, float), time.perf_counter() - t0)
+        else:                                        # B^T K^-1 O^T: one solve per row of O
+            out = _apply_inverse(system, O.T.tocsc(), B[:, reach].T.tocsr())
+    WT = np.empty((k, m))
+    WT[:, reach] = system.compliance(sn.nodes[reach], a)            # symmetric: rows are columns
+    WT[:, ~reach] = out[:, :m - k]
+    return ResponseModel(key, a, reach, WT, out[:, m - k:], np.asarray(sampler.shift_mm, float),
+                         time.perf_counter() - t0)
 
 
 def _apply_inverse(system, loads, observe) -> np.ndarray:
@@ -162,25 +161,25 @@ def _apply_inverse(system, loads, observe) -> np.ndarray:
 
 
 def _apply_condensed(system, nodes, a, observe) -> np.ndarray:
-    """(p, k) observe (p, ndof) K^-1 B for unit loads along `a` at the condensed `nodes` (k,),
-    BLOCK columns per backward substitution (`LinearSystem.solve_condensed`). The first block's
+    """(k, p) (observe (p, ndof) K^-1 B)^T for unit loads along `a` at the condensed `nodes` (k,),
+    BLOCK of them per backward substitution (`LinearSystem.solve_condensed`). The first block's
     residual is checked (and refined as `fem.linalg.SaddleFactor` does); later blocks only while
     refinement steps gained accuracy: the loads are all of one kind on one factorisation, so a
     block that needed none (or where refinement stopped helping) speaks for the rest."""
-    out = np.empty((observe.shape[0], len(nodes)))
+    out = np.empty((len(nodes), observe.shape[0]))
     check = True
     for s in range(0, len(nodes), BLOCK):
-        out[:, s:s + BLOCK] = observe @ system.solve_condensed(nodes[s:s + BLOCK], a, check=check)
+        out[s:s + BLOCK] = (observe @ system.solve_condensed(nodes[s:s + BLOCK], a, check=check)).T
         check = check and system.refined
     return out
 
 
 # --------------------------------------------------------------------------- storage
 class ResponseStore:
-    """The response models of one model folder: `<model>/response/<key>/` with W.npy, R.npy,
-    reach.npy and response.json; written atomically, read memory-mapped."""
+    """The response models of one model folder: `<model>/response/<key>/` with WT.npy, RT.npy,
+    reach.npy, shift_mm.npy and response.json; written atomically, read memory-mapped."""
 
-    FILES = ("W.npy", "R.npy", "reach.npy", "shift_mm.npy")
+    FILES = ("WT.npy", "RT.npy", "reach.npy", "shift_mm.npy")
 
     def __init__(self, model_dir):
         self.folder = Path(model_dir) / "response"
@@ -227,10 +226,10 @@ class ResponseStore:
             return None
         try:
             meta = json.loads((folder / "response.json").read_text())
-            W, R, reach, shift = (np.load(folder / f, mmap_mode="r") for f in self.FILES)
-            m, k = meta["shape_W"]
-            ok = (meta["format"] == RESPONSE_FORMAT and meta["key"] == key and W.shape == (m, k)
-                  and W.dtype == R.dtype == np.float64 and list(R.shape) == meta["shape_R"] and R.shape[1] == k
+            WT, RT, reach, shift = (np.load(folder / f, mmap_mode="r") for f in self.FILES)
+            k, m = meta["shape_WT"]
+            ok = (meta["format"] == RESPONSE_FORMAT and meta["key"] == key and WT.shape == (k, m)
+                  and WT.dtype == RT.dtype == np.float64 and list(RT.shape) == meta["shape_RT"] and RT.shape[0] == k
                   and reach.shape == (m,) and reach.dtype == bool and int(reach.sum()) == k
                   and shift.shape == (meta["receptor_points"],))
             if not ok:
@@ -240,19 +239,19 @@ class ResponseStore:
                           stacklevel=2)
             shutil.rmtree(folder, ignore_errors=True)
             return None
-        return ResponseModel(key, np.asarray(meta["approach"], float), np.asarray(reach), W, R,
+        return ResponseModel(key, np.asarray(meta["approach"], float), np.asarray(reach), WT, RT,
                              np.asarray(shift), float(meta["build_seconds"]), int(meta["bytes"]))
 
     def save(self, rm: ResponseModel) -> ResponseModel:
         """Write `rm` atomically (a staged folder renamed into place); returns it with `nbytes` set."""
         target = self.path(rm.key)
         with staged_output(target) as tmp:
-            for name, arr in zip(self.FILES, (rm.W, rm.R, rm.reach, rm.shift_mm)):
-                np.save(tmp / name, np.ascontiguousarray(arr))
+            for name, arr in zip(self.FILES, (rm.WT, rm.RT, rm.reach, rm.shift_mm)):
+                np.save(tmp / name, arr)                # RT may be a view: written without a copy
             rm.nbytes = sum((tmp / f).stat().st_size for f in self.FILES)
             write_json(tmp / "response.json", {
                 "format": RESPONSE_FORMAT, "key": rm.key, "approach": np.asarray(rm.approach).tolist(),
-                "shape_W": list(rm.W.shape), "shape_R": list(rm.R.shape),
+                "shape_WT": list(rm.WT.shape), "shape_RT": list(rm.RT.shape),
                 "receptor_points": len(rm.shift_mm), "build_seconds": rm.build_seconds, "bytes": rm.nbytes})
         self._remember()
         return rm
@@ -262,21 +261,55 @@ class ResponseStore:
 class StoredCompliance(DenseReach, Compliance):
     """The compliance and observed response of a `ResponseModel`: the same interface as
     `fem.compliance.CondensedCompliance` (NaN compliance rows outside `reach`, deflections of
-    those candidates with the observation), answered by matrix products, no solves."""
+    those candidates with the observation), answered by matrix products, no solves. Only the
+    rows of candidates a contact problem touches are read from the (memory-mapped) model, each
+    once."""
 
     def __init__(self, rm: ResponseModel):
-        super().__init__(*[len(rm.W), len(rm.R)])
-        self._W, self._R = rm.W, rm.R
-        self._dense(rm.C, rm.reach)
+        k, m = rm.WT.shape
+        super().__init__(m, rm.RT.shape[1])
+        self._WT, self._RT = rm.WT, rm.RT
+        self._at = np.full(k, -1)                   # condensed row -> row of _read
+        self._read = np.empty((0, m))
+        self._nread = 0
+        self._dense(rm.reach, rm.WT[np.arange(k), np.flatnonzero(rm.reach)])
+
+    def _slots(self, rows) -> np.ndarray:
+        """(len(rows),) rows of `_read` holding those rows of WT, each read from the stored model once."""
+        rows = np.asarray(rows, int)
+        new = np.unique(rows[self._at[rows] < 0])
+        if new.size:
+            n = self._nread
+            if n + new.size > len(self._read):
+                grown = np.empty((min(max(2 * len(self._read), n + new.size, 256), len(self._at)), self.m))
+                grown[:n] = self._read[:n]
+                self._read = grown
+            self._read[n:n + new.size] = self._WT[new]
+            self._at[new] = np.arange(n, n + new.size)
+            self._nread += new.size
+        return self._at[rows]
+
+    def _rows(self, rows) -> np.ndarray:
+        slots = self._slots(rows)                   # may grow `_read`: before indexing it
+        w = self._read[slots]
+        return w if self.reach.all() else w[:, self.reach]
+
+    def block(self, rows, cols) -> np.ndarray:
+        """(len(rows), len(cols)) compliance between candidates (WT's columns are all m of them):
+        only those entries are gathered."""
+        slots = self._slots(self._row[np.asarray(cols, int)])
+        return self._read[np.ix_(slots, np.asarray(rows, int))].T
 
     def observed(self, idx) -> np.ndarray:
-        return np.asarray(self._R[:, self._row[np.asarray(idx, int)]])
+        return np.asarray(self._RT[self._row[np.asarray(idx, int)]]).T
 
     def response(self, force_N) -> tuple[np.ndarray, np.ndarray]:
         """((m, k) deflections of every candidate along the approach, (r, k) observed response) to
-        nodal contact forces (m, k)."""
+        nodal contact forces (m, k): the rows of the candidates that carry force only."""
         F = np.asarray(force_N, float).reshape(self.m, -1)[self.reach]
-        return self._W @ F, self._R @ F
+        act = np.flatnonzero(np.any(F != 0, axis=1))
+        slots = self._slots(act)
+        return self._read[slots].T @ F[act], np.asarray(self._RT[act]).T @ F[act]
 
     def observe(self, force_N) -> np.ndarray:
         """(r,) or (r, k) observed response to nodal contact forces (m,) or (m, k)."""
@@ -335,7 +368,7 @@ def stored_responses(store: ResponseStore, model, approaches, grid, touched, pro
         else:
             used.append((key, "stored", rm.build_seconds, rm.nbytes))
         progress.note(f"response model: {used[-1][1]} {key[:12]} ({rm.nbytes / 2**20:.1f} MB, "
-                      f"{rm.W.shape[1]} condensed candidates, built in {rm.build_seconds:.2f} s)")
+                      f"{rm.WT.shape[0]} condensed candidates, built in {rm.build_seconds:.2f} s)")
         out[ak] = rm
     if sampler is None:
         sampler = ReceptorSampler.without_operator(model.dim, grid, next(iter(out.values())).shift_mm)

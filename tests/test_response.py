@@ -103,9 +103,9 @@ def test_corrupt_store_is_rebuilt(cyl8, damage):
     del first                                   # its memory maps: a file truncated in place is not readable
     folder = ResponseStore(cyl8).path(key)
     if damage == "truncate":
-        data = (folder / "R.npy").read_bytes()
-        (folder / "R.npy").unlink()
-        (folder / "R.npy").write_bytes(data[:len(data) // 2])
+        data = (folder / "RT.npy").read_bytes()
+        (folder / "RT.npy").unlink()
+        (folder / "RT.npy").write_bytes(data[:len(data) // 2])
     else:
         (folder / "response.json").write_text("{not json")
     with pytest.warns(UserWarning, match="unreadable"):

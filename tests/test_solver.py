@@ -207,6 +207,17 @@ def test_vertex_dofs_and_surface_nodes(block3d):
     np.testing.assert_allclose(m.surface_nodes("xmin").normal[:, 0], -1.0)
 
 
+def test_p2_nodes_without_the_basis_are_the_basis_dofs(block3d):
+    """`nodes`, `nnodes` and `ndof` come from the mesh alone (a stored-response run builds no basis);
+    they are skfem's P2 DOF locations and count, in 3D and 2D."""
+    pts, cells, _ = ref.box(np.linspace(0, 1, 4), np.linspace(0, 2, 3))
+    for m in (Model(block3d.mesh.p.T, block3d.mesh.t.T, block3d.layer), Model(pts, cells, np.ones(len(cells)))):
+        nodes, ndof = m.nodes, m.ndof
+        assert "basis" not in vars(m)
+        assert ndof == m.basis.N == m.dim * m.nnodes
+        np.testing.assert_array_equal(nodes, m.basis.doflocs[:, ::m.dim].T)
+
+
 def test_rigid_bone_matches_very_stiff_bone():
     pts, cells, regions = ref.box(np.linspace(0, 2, 9), np.linspace(0, 1, 5))
     layer = np.where(pts[cells].mean(axis=1)[:, 1] < 0.25, 5, 1)
