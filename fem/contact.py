@@ -152,8 +152,8 @@ def solve_lcp(columns, q, start=None, tol_mm: float = GAP_TOL_MM, max_iter: int 
                 slot[new] = np.arange(have, have + new.size)
             have = int(slot.max()) + 1
             with blas_threads(1 if idx.size < SERIAL_BLAS_BELOW else None):
-                factor = sla.cho_factor(held[np.ix_(idx, slot[idx])], lower=True)
-                f[idx] = sla.cho_solve(factor, -q[idx])
+                factor = sla.cho_factor(held[np.ix_(idx, slot[idx])], lower=True, check_finite=False)
+                f[idx] = sla.cho_solve(factor, -q[idx], check_finite=False)
             fs = np.zeros(have)                     # forces in fetched-column order
             fs[slot[idx]] = f[idx]
             g = q + held[:, :have] @ fs
