@@ -18,7 +18,7 @@ def format_column(values, float_format: str = "%.9g", nan: str | None = None) ->
     else (ints, bools, strings) as str()."""
     v = np.asarray(values)
     if v.dtype.kind == "f":
-        out = np.char.mod(float_format, v).astype(object)
+        out = np.array([float_format % x for x in v.ravel().tolist()], dtype=object)   # 2x np.char.mod
         if nan is not None:
             out[np.isnan(v)] = nan
         return out
