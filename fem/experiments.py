@@ -143,16 +143,20 @@ def run_experiments(model, info, scene: Scene, progress=None, store=None, only: 
     else:
         responses, sampler, used = stored_responses(store, model, [r.indentor.approach for r in runs], grid,
                                                     touched, progress)
-        cm = contact_model(model, sn, responses)
+        cm, system = contact_model(model, sn, responses), None
     todo = [(run, off, load) for k, run in enumerate(runs) if only is None or k == only
             for off, load in run.experiment.indentations]
     solved = {}                       # a trace repeats indentations (a hold): each is solved once
-    for run, off, load in progress.bar(todo, desc="indentations", unit="indentation"):
+    for i, (run, off, load) in enumerate(progress.bar(todo, desc="indentations", unit="indentation")):
         t0 = time.perf_counter()
         key = (id(run), tuple(off), tuple(sorted(load.items())))
         if key not in solved:
             solved[key] = _indent_one(cm, run, off, load)
         run.steps.append((off, solved[key]))
+        if i + 1 == len(todo) or todo[i + 1][0] is not run:
+            if system is not None:    # an experiment's numbers do not depend on those before it:
+                system.restart_refinement()             # the serial run writes its tasks' bytes
+            cm.observe_pending()      # one block per experiment, as a task of `run_experiment` does
         run.seconds += time.perf_counter() - t0
     return SceneRun(model, info, scene, cm, sn, grid, sampler, list(rc.measures), line, runs, warnings, used)
 

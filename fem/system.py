@@ -59,6 +59,11 @@ class LinearSystem:
         u[self.free] = self._solve_free(f[self.free])
         return u
 
+    def restart_refinement(self) -> None:
+        """Forget what earlier solves learnt about refinement (`fem.linalg.SaddleFactor`): the next
+        solves refine as on a fresh factorisation, so their bits do not depend on the solves before."""
+        self._factor.refine_tol = self._factor.REFINE_TOL
+
     @property
     def condensed(self) -> tuple[np.ndarray, np.ndarray | None]:
         """(nodes (k,), unit direction (dim,) or None): P2 nodes whose compliance along the

@@ -102,18 +102,11 @@ def test_indent_scene_with_two_experiments_on_a_local_cluster(tmp_path):
                           "--scheduler", "local:2"]) == 0
     names = sorted(p.name for p in serial.iterdir())
     assert names == sorted(p.name for p in parallel.iterdir()) and len(names) == 7
-    for name in ("C5.csv", "bar.csv"):          # depths, forces, areas, pressures, KKT: every byte
-        assert (serial / name).read_bytes() == (parallel / name).read_bytes(), name
+    for name in names:                  # every byte: each experiment is observed in its own block solve
+        if name != "run.json":          # in both runs, as a task does
+            assert (serial / name).read_bytes() == (parallel / name).read_bytes(), name
     a, b = _json(serial / "run.json"), _json(parallel / "run.json")
     assert a == b
-    # receptor measures and deflections: each task observes its own experiment's indentations
-    # in one block solve, the serial run all of them in one (PARDISO's sums differ in the last bits)
-    for name in ("C5_receptors.csv", "C5_surface.csv", "bar_receptors.csv", "bar_surface.csv"):
-        x = np.genfromtxt(serial / name, delimiter=",", names=True)
-        y = np.genfromtxt(parallel / name, delimiter=",", names=True)
-        for col in x.dtype.names:
-            scale = max(np.abs(x[col]).max(), 1e-300)
-            np.testing.assert_allclose(y[col], x[col], rtol=0, atol=1e-8 * scale, err_msg=f"{name} {col}")
 
 
 @pytest.mark.parametrize("command", ["study-layers", "fit-material", "indent"])
