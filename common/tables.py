@@ -1,6 +1,6 @@
 """The table writer: CSV (RFC 4180 line endings, a header of column names with unit suffixes,
-`_mm`, `_N`, `_MPa`, ...) and the same table as Markdown. Columns are formatted whole, with
-NumPy, not value by value.
+`_mm`, `_N`, `_MPa`, ...) and the same table as Markdown. Columns are formatted whole; rows
+are joined directly unless a text cell needs the csv module's quoting.
 
     write_csv("out/c5.csv", {"depth_mm": depths, "force_N": forces, "kkt_ok": ok})
 """
@@ -47,8 +47,13 @@ def csv_text(columns: Mapping[str, object], float_format: str = "%.9g", nan: str
     buf = io.StringIO()
     w = csv.writer(buf)
     w.writerow(list(columns))
-    if cols and len(cols[0]):
+    if not cols or not len(cols[0]):
+        return buf.getvalue()
+    words = [c for c, v in zip(cols, columns.values()) if np.asarray(v).dtype.kind in "OSU"]
+    if len(cols) == 1 or any(ch in cell for c in words for cell in c for ch in ',"\r\n'):
         w.writerows(np.stack(cols, axis=1).tolist())     # csv quotes the cells that need it
+    else:                                                # numbers and plain words: nothing to quote
+        buf.write("".join(",".join(row) + "\r\n" for row in zip(*cols)))
     return buf.getvalue()
 
 

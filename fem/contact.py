@@ -124,39 +124,73 @@ class LCPSolution:
     iterations: int
 
 
-def solve_lcp(columns, q, start=None, tol_mm: float = GAP_TOL_MM, max_iter: int = 500) -> LCPSolution:
+class LCPBlocks:
+    """Columns of C over one candidate subset (n,), each fetched once, and the Cholesky factor of
+    the last active set: successive LCPs on the same subset (force control's depth iterations,
+    sweep positions under a wide indentor) fetch only newly touching columns and refactorise only
+    a changed active set. Products sum in fetch order, so the bits depend on the LCPs before on
+    the same blocks: `ContactModel.restart` starts new ones per experiment."""
+
+    def __init__(self, columns, n: int):
+        self._fetch, self._slot = columns, np.full(n, -1)
+        self._held = np.empty((n, 0), order="F")
+        self._have = 0
+        self._last = None                   # (active (n,) bool, cho_factor of its block)
+
+    def _slots(self, idx) -> np.ndarray:
+        """Columns of `_held` holding C's columns idx (fetched when new)."""
+        new = idx[self._slot[idx] < 0]
+        if new.size:
+            if self._have + new.size > self._held.shape[1]:
+                grown = np.empty((len(self._slot), max(2 * self._held.shape[1], self._have + new.size)), order="F")
+                grown[:, :self._have] = self._held[:, :self._have]
+                self._held = grown
+            self._held[:, self._have:self._have + new.size] = self._fetch(new)
+            self._slot[new] = np.arange(self._have, self._have + new.size)
+            self._have += new.size
+        return self._slot[idx]
+
+    def apply(self, idx, f) -> np.ndarray:
+        """(n,) C[:, idx] @ f (f (len(idx),)), summed in fetch order: no gathered copy."""
+        slots = self._slots(idx)
+        fs = np.zeros(self._have)
+        fs[slots] = f
+        return self._held[:, :self._have] @ fs
+
+    def factor(self, active) -> tuple:
+        """cho_factor of C over the active set (n,) bool, reused while it is the last one's."""
+        if self._last is None or not np.array_equal(self._last[0], active):
+            idx = np.flatnonzero(active)
+            with blas_threads(1 if len(idx) < SERIAL_BLAS_BELOW else None):
+                slots = self._slots(idx)                # may grow `_held`: before indexing it
+                block = self._held[np.ix_(idx, slots)]
+                self._last = (active.copy(), sla.cho_factor(block, lower=True, check_finite=False))
+        return self._last[1]
+
+
+def solve_lcp(columns, q, start=None, tol_mm: float = GAP_TOL_MM, max_iter: int = 500,
+              blocks: LCPBlocks | None = None) -> LCPSolution:
     """Solve f >= 0, g = q + C f >= -tol, f g = 0 for symmetric positive definite C.
 
     columns: callable idx -> (n, k) columns of C; q: (n,) gaps without contact forces (mm);
     start: (n,) bool initial guess of the active set (default: q < 0), e.g. the previous
-    solution's. Block principal pivoting
-    with Murty's rule as backup: finite for P-matrices.
+    solution's; blocks: an `LCPBlocks` of earlier LCPs with the same C (its columns are used
+    instead of `columns`). Block principal pivoting with Murty's rule as backup: finite for
+    P-matrices.
     """
     n = len(q)
     active = (q < 0) if start is None else start.copy()
     best, backup = n + 1, 3
-    slot, held = np.full(n, -1), np.empty((n, 0), order="F")     # columns fetched so far
+    blocks = LCPBlocks(columns, n) if blocks is None else blocks
     for it in range(1, max_iter + 1):
         idx = np.flatnonzero(active)
         f = np.zeros(n)
         factor = None
         if idx.size:
-            new = idx[slot[idx] < 0]                # pivots change a few nodes: fetch only those
-            if new.size:
-                have = int(slot.max(initial=-1)) + 1
-                if have + new.size > held.shape[1]:
-                    grown = np.empty((n, max(2 * held.shape[1], have + new.size)), order="F")
-                    grown[:, :have] = held[:, :have]
-                    held = grown
-                held[:, have:have + new.size] = columns(new)
-                slot[new] = np.arange(have, have + new.size)
-            have = int(slot.max()) + 1
+            factor = blocks.factor(active)
             with blas_threads(1 if idx.size < SERIAL_BLAS_BELOW else None):
-                factor = sla.cho_factor(held[np.ix_(idx, slot[idx])], lower=True, check_finite=False)
                 f[idx] = sla.cho_solve(factor, -q[idx], check_finite=False)
-            fs = np.zeros(have)                     # forces in fetched-column order
-            fs[slot[idx]] = f[idx]
-            g = q + held[:, :have] @ fs
+            g = q + blocks.apply(idx, f[idx])
         else:
             g = q.copy()
         ftol = 1e-12 * max(np.abs(f).max(), 1e-300)
@@ -266,8 +300,15 @@ class ContactModel:
         self._compliance_for = compliance_for
         self._compliance = {}
         self.tol_mm = tol_mm
-        self._warm = None
         self._pending = []           # (result, compliance) awaiting observations
+        self.restart()
+
+    def restart(self) -> None:
+        """Forget what earlier indentations leave for the next (warm start, force control's first
+        trial depth, fetched compliance blocks): what follows is computed as by a new contact model,
+        so an experiment's numbers do not depend on the experiments before it."""
+        self._warm = None
+        self._blocks = None          # (compliance, candidate subset, LCPBlocks) of the last LCP
         self._force_depth = 0.5      # first trial depth (mm) of force control; then the last one
 
     @classmethod
@@ -318,7 +359,9 @@ class ContactModel:
         sub = sub[comp.reach[sub]]
         q = gap0[sub]
         start = warm[sub] if warm is not None and warm[sub].any() else q < min(0.0, 0.5 * q.min(initial=0))
-        lcp = solve_lcp(lambda i: comp.block(sub, sub[i]), q, start, self.tol_mm)
+        if not (self._blocks and self._blocks[0] is comp and np.array_equal(self._blocks[1], sub)):
+            self._blocks = (comp, sub, LCPBlocks(lambda i: comp.block(sub, sub[i]), len(sub)))
+        lcp = solve_lcp(None, q, start, self.tol_mm, blocks=self._blocks[2])
         m = len(self.points_mm)
         f = np.zeros(m)
         f[sub] = lcp.force

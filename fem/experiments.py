@@ -157,6 +157,7 @@ def run_experiments(model, info, scene: Scene, progress=None, store=None, only: 
             if system is not None:    # an experiment's numbers do not depend on those before it:
                 system.restart_refinement()             # the serial run writes its tasks' bytes
             cm.observe_pending()      # one block per experiment, as a task of `run_experiment` does
+            cm.restart()
         run.seconds += time.perf_counter() - t0
     return SceneRun(model, info, scene, cm, sn, grid, sampler, list(rc.measures), line, runs, warnings, used)
 

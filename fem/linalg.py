@@ -21,6 +21,7 @@ import contextlib
 import ctypes
 import functools
 import os
+import sys
 import warnings
 
 import numpy as np
@@ -31,9 +32,16 @@ from common.errors import InputError
 
 
 # --------------------------------------------------------------------------- BLAS threads
-@functools.lru_cache(maxsize=1)
 def _thread_controller():
-    """threadpoolctl's view of the loaded BLAS libraries (scanned once, then cached).
+    """threadpoolctl's view of the loaded BLAS libraries: scanned again once pypardiso has loaded
+    MKL (a view taken before would leave PARDISO's threads unlimited), else cached."""
+    return _scanned("pypardiso" in sys.modules)
+
+
+@functools.lru_cache(maxsize=2)
+def _scanned(with_mkl: bool):  # noqa: ARG001 - the cache key
+    """threadpoolctl's ThreadpoolController (a scan of the loaded libraries, about 10 ms), one
+    per `with_mkl` (whether pypardiso is imported).
 
     Importing threadpoolctl sets KMP_DUPLICATE_LIB_OK in the environment (to tolerate several
     OpenMP runtimes); the library leaves the caller's environment as it found it, so that entry is

@@ -1,6 +1,7 @@
 """fem.linalg: PARDISO's Schur complement and Schur-path solves against dense linear algebra,
 the refined saddle solve, BLAS thread limits, and no environment changes."""
 import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -165,3 +166,21 @@ def test_blas_threads_limits_and_restores():
     with blas_threads(None):
         assert blas() == outside
     assert blas() == outside
+
+
+def test_blas_limit_reaches_pardiso_loaded_after_a_first_limit():
+    """A limit set before pypardiso loaded MKL must still reach MKL afterwards (a cached scan of
+    the libraries once left PARDISO on all threads, and a serial run's bits differed from its
+    one-thread tasks')."""
+    import subprocess
+    import sys
+
+    code = ("from fem.linalg import blas_threads, _thread_controller\n"
+            "with blas_threads(1): pass\n"
+            "import pypardiso\n"
+            "with blas_threads(1):\n"
+            "    mkl = [i for i in _thread_controller().info() if i['internal_api'] == 'mkl']\n"
+            "    print(len(mkl), [i['num_threads'] for i in mkl])\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         cwd=str(Path(__file__).resolve().parents[1])).stdout.split("\n")[0]
+    assert out == "1 [1]"
