@@ -22,6 +22,19 @@ def quadratic_cells(model) -> np.ndarray:
 
 def write_vtu(path, solution) -> None:
     """Write `solution` (fem.fields.Solution) to a VTU file at `path`."""
+    write_mesh(path, vtu_mesh(solution))
+
+
+def write_mesh(path, mesh) -> None:
+    """Write a `vtu_mesh` to `path` (atomically; zlib-compressed by meshio, which releases the
+    GIL while it compresses, so several files can be written from threads at once)."""
+    import meshio
+
+    atomic_write(path, lambda tmp: meshio.write(tmp, mesh, file_format="vtu"))
+
+
+def vtu_mesh(solution):
+    """meshio.Mesh of a `solution`: the P2 cells, displacement and the element fields."""
     import meshio
 
     model = solution.model
@@ -32,10 +45,9 @@ def write_vtu(path, solution) -> None:
     E = np.vectorize(model.material.E_MPa.get, otypes=[float])(model.layer)
     nu = np.vectorize(model.material.nu.get, otypes=[float])(model.layer)
     cell_data = {"layer": model.layer.astype(np.int32), "E_MPa": E, "nu": nu, **solution.element_fields}
-    mesh = meshio.Mesh(points, [(_VTK_CELL[model.dim], quadratic_cells(model))],
+    return meshio.Mesh(points, [(_VTK_CELL[model.dim], quadratic_cells(model))],
                        point_data={"displacement_mm": disp},
                        cell_data={k: [np.asarray(v)] for k, v in cell_data.items()})
-    atomic_write(path, lambda tmp: meshio.write(tmp, mesh, file_format="vtu"))
 
 
 def write_csv(path, points, columns: dict[str, np.ndarray]) -> None:
