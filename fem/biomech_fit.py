@@ -111,10 +111,17 @@ def fit_material(exp: DeflectionExperiment, data: list[Profile], base: str = "m4
         shifted = [x + h * np.eye(len(x))[j] for j, h in enumerate(steps)]
         return steps, shifted
 
+    trials = []
+
     def fun(x):
         if exp.map is not None:         # the trial point with its columns, in parallel
             exp.evaluate([full(x)] + [full(xp) for xp in columns(x)[1]], depths)
-        return residuals(full(x))
+        r = residuals(full(x))
+        trials.append(float(np.sqrt(np.mean(r ** 2))))
+        exp.progress.note(f"fit trial {len(trials)}: log10 Pa of layers {list(free_layers)} = "
+                          f"{np.round(x, 3).tolist()}, rms {trials[-1]:.4g} mm, best {min(trials):.4g} mm "
+                          f"({len(used)} distinct materials solved)")
+        return r
 
     def jac(x):
         steps, shifted = columns(x)
