@@ -16,6 +16,37 @@ import scipy.sparse as sp
 from common.errors import InputError
 
 
+class RowCache:
+    """Vectors (length,) fetched once each by index and kept as the rows of `data`; the rows grow
+    by doubling. fetch: sorted unique indices (k,) -> (k, length); count: how many indices exist.
+
+        cache = RowCache(lambda i: WT[i], len(WT), WT.shape[1])
+        rows = cache.data[cache.slots(idx)]          # (len(idx), length)
+    """
+
+    def __init__(self, fetch, count: int, length: int):
+        self._fetch = fetch
+        self._slot = np.full(count, -1)
+        self.data = np.empty((0, length))
+        self.size = 0
+
+    def slots(self, idx) -> np.ndarray:
+        """(len(idx),) rows of `data` holding the vectors idx, fetching the new ones (call it
+        before reading `data`: it may replace the array)."""
+        idx = np.asarray(idx, int)
+        new = np.unique(idx[self._slot[idx] < 0])
+        if new.size:
+            n = self.size
+            if n + new.size > len(self.data):
+                grown = np.empty((min(max(2 * len(self.data), n + new.size, 16), len(self._slot)), self.data.shape[1]))
+                grown[:n] = self.data[:n]
+                self.data = grown
+            self.data[n:n + new.size] = self._fetch(new)
+            self._slot[new] = np.arange(n, n + new.size)
+            self.size += new.size
+        return self._slot[idx]
+
+
 class Compliance:
     """Cached compliance columns: C[:, j] (m,) and observed response O K^-1 B e_j (r,).
 
@@ -26,29 +57,21 @@ class Compliance:
         self.m, self.r = m, r
         self.held = np.zeros(m, bool)       # nodes that cannot move along the approach (zero compliance)
         self.reach = np.ones(m, bool)       # nodes whose compliance is available (see CondensedCompliance)
-        self._slot = np.full(m, -1)
-        self._store = np.empty((m + r, 0))
-        self.computed = 0
+        self._cache = RowCache(lambda i: self._compute(i).T, m, m + r)      # one row per candidate
 
-    def _ensure(self, idx):
-        missing = np.unique(idx[self._slot[idx] < 0])
-        if missing.size:
-            new = self._compute(missing)
-            start = self.computed
-            if start + missing.size > self._store.shape[1]:
-                cap = max(2 * self._store.shape[1], start + missing.size, 16)
-                grown = np.empty((self.m + self.r, cap))
-                grown[:, :start] = self._store[:, :start]
-                self._store = grown
-            self._store[:, start:start + missing.size] = new
-            self._slot[missing] = np.arange(start, start + missing.size)
-            self.computed += missing.size
+    @property
+    def computed(self) -> int:
+        """Candidates whose columns have been computed."""
+        return self._cache.size
+
+    def _column_rows(self, idx) -> np.ndarray:
+        """(len(idx), m + r) the computed columns of candidates idx, one per row."""
+        slots = self._cache.slots(idx)
+        return self._cache.data[slots]
 
     def columns(self, idx) -> np.ndarray:
         """(m, k) compliance columns (mm/N) of candidate nodes idx."""
-        idx = np.asarray(idx, int)
-        self._ensure(idx)
-        return self._store[:self.m, self._slot[idx]]
+        return self._column_rows(idx)[:, :self.m].T
 
     def block(self, rows, cols) -> np.ndarray:
         """(len(rows), len(cols)) compliance (mm/N) between candidate nodes."""
@@ -56,9 +79,7 @@ class Compliance:
 
     def observed(self, idx) -> np.ndarray:
         """(r, k) observed response per unit force at candidate nodes idx."""
-        idx = np.asarray(idx, int)
-        self._ensure(idx)
-        return self._store[self.m:, self._slot[idx]]
+        return self._column_rows(idx)[:, self.m:].T
 
     def observe(self, force_N) -> np.ndarray:
         """(r,) or (r, k) observed response to nodal contact forces (m,) or (m, k): cached

@@ -53,7 +53,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from common.errors import InputError
-from fem.compliance import Compliance, CondensedCompliance, FactorCompliance
+from fem.compliance import Compliance, CondensedCompliance, FactorCompliance, RowCache
 from fem.linalg import SERIAL_BLAS_BELOW, blas_threads
 
 GAP_TOL_MM = 1e-8
@@ -125,63 +125,47 @@ class LCPSolution:
 
 
 class LCPBlocks:
-    """Columns of C over one candidate subset (n,), each fetched once, and the Cholesky factor of
-    the last active set: successive LCPs on the same subset (force control's depth iterations,
-    sweep positions under a wide indentor) fetch only newly touching columns and refactorise only
-    a changed active set. Products sum in fetch order, so the bits depend on the LCPs before on
-    the same blocks: `ContactModel.restart` starts new ones per experiment."""
+    """Columns of C over one candidate subset (n,), each fetched once (a `RowCache` of them, one
+    per row: C is symmetric), and the Cholesky factor of the last active set: successive LCPs on
+    the same subset (force control's depth iterations, sweep positions under a wide indentor)
+    fetch only newly touching columns and refactorise only a changed active set. Products sum in
+    fetch order, so the bits depend on the LCPs before on the same blocks: `ContactModel.restart`
+    starts new ones per experiment."""
 
     def __init__(self, columns, n: int):
-        self._fetch, self._slot = columns, np.full(n, -1)
-        self._held = np.empty((n, 0), order="F")
-        self._have = 0
+        self._cols = RowCache(lambda i: columns(i).T, n, n)
         self._last = None                   # (active (n,) bool, cho_factor of its block)
-
-    def _slots(self, idx) -> np.ndarray:
-        """Columns of `_held` holding C's columns idx (fetched when new)."""
-        new = idx[self._slot[idx] < 0]
-        if new.size:
-            if self._have + new.size > self._held.shape[1]:
-                grown = np.empty((len(self._slot), max(2 * self._held.shape[1], self._have + new.size)), order="F")
-                grown[:, :self._have] = self._held[:, :self._have]
-                self._held = grown
-            self._held[:, self._have:self._have + new.size] = self._fetch(new)
-            self._slot[new] = np.arange(self._have, self._have + new.size)
-            self._have += new.size
-        return self._slot[idx]
 
     def apply(self, idx, f) -> np.ndarray:
         """(n,) C[:, idx] @ f (f (len(idx),)), summed in fetch order: no gathered copy."""
-        slots = self._slots(idx)
-        fs = np.zeros(self._have)
+        slots = self._cols.slots(idx)
+        fs = np.zeros(self._cols.size)
         fs[slots] = f
-        return self._held[:, :self._have] @ fs
+        return fs @ self._cols.data[:self._cols.size]
 
     def factor(self, active) -> tuple:
         """cho_factor of C over the active set (n,) bool, reused while it is the last one's."""
         if self._last is None or not np.array_equal(self._last[0], active):
             idx = np.flatnonzero(active)
+            slots = self._cols.slots(idx)
             with blas_threads(1 if len(idx) < SERIAL_BLAS_BELOW else None):
-                slots = self._slots(idx)                # may grow `_held`: before indexing it
-                block = self._held[np.ix_(idx, slots)]
+                block = self._cols.data[np.ix_(slots, idx)].T       # C[idx][:, idx]
                 self._last = (active.copy(), sla.cho_factor(block, lower=True, check_finite=False))
         return self._last[1]
 
 
-def solve_lcp(columns, q, start=None, tol_mm: float = GAP_TOL_MM, max_iter: int = 500,
-              blocks: LCPBlocks | None = None) -> LCPSolution:
+def solve_lcp(columns, q, start=None, tol_mm: float = GAP_TOL_MM, max_iter: int = 500) -> LCPSolution:
     """Solve f >= 0, g = q + C f >= -tol, f g = 0 for symmetric positive definite C.
 
-    columns: callable idx -> (n, k) columns of C; q: (n,) gaps without contact forces (mm);
-    start: (n,) bool initial guess of the active set (default: q < 0), e.g. the previous
-    solution's; blocks: an `LCPBlocks` of earlier LCPs with the same C (its columns are used
-    instead of `columns`). Block principal pivoting with Murty's rule as backup: finite for
-    P-matrices.
+    columns: callable idx -> (n, k) columns of C, or the `LCPBlocks` of earlier LCPs with the
+    same C; q: (n,) gaps without contact forces (mm); start: (n,) bool initial guess of the active
+    set (default: q < 0), e.g. the previous solution's. Block principal pivoting with Murty's rule
+    as backup: finite for P-matrices.
     """
     n = len(q)
     active = (q < 0) if start is None else start.copy()
     best, backup = n + 1, 3
-    blocks = LCPBlocks(columns, n) if blocks is None else blocks
+    blocks = columns if isinstance(columns, LCPBlocks) else LCPBlocks(columns, n)
     for it in range(1, max_iter + 1):
         idx = np.flatnonzero(active)
         f = np.zeros(n)
@@ -361,7 +345,7 @@ class ContactModel:
         start = warm[sub] if warm is not None and warm[sub].any() else q < min(0.0, 0.5 * q.min(initial=0))
         if not (self._blocks and self._blocks[0] is comp and np.array_equal(self._blocks[1], sub)):
             self._blocks = (comp, sub, LCPBlocks(lambda i: comp.block(sub, sub[i]), len(sub)))
-        lcp = solve_lcp(None, q, start, self.tol_mm, blocks=self._blocks[2])
+        lcp = solve_lcp(self._blocks[2], q, start, self.tol_mm)
         m = len(self.points_mm)
         f = np.zeros(m)
         f[sub] = lcp.force

@@ -47,7 +47,7 @@ import scipy.sparse as sp
 
 from common.progress import as_progress
 from common.staging import staged_output, write_json
-from fem.compliance import Compliance, DenseReach
+from fem.compliance import Compliance, DenseReach, RowCache
 from fem.contact import ContactModel, fe_facets
 from fem.modelfolder import CONDENSE_MAX_NODES, CONTACT_REGION, HELD, held_regions
 
@@ -269,36 +269,19 @@ class StoredCompliance(DenseReach, Compliance):
         k, m = rm.WT.shape
         super().__init__(m, rm.RT.shape[1])
         self._WT, self._RT = rm.WT, rm.RT
-        self._at = np.full(k, -1)                   # condensed row -> row of _read
-        self._read = np.empty((0, m))
-        self._nread = 0
+        self._read = RowCache(lambda i: self._WT[i], k, m)          # rows of WT read so far
         self._dense(rm.reach, rm.WT[np.arange(k), np.flatnonzero(rm.reach)])
 
-    def _slots(self, rows) -> np.ndarray:
-        """(len(rows),) rows of `_read` holding those rows of WT, each read from the stored model once."""
-        rows = np.asarray(rows, int)
-        new = np.unique(rows[self._at[rows] < 0])
-        if new.size:
-            n = self._nread
-            if n + new.size > len(self._read):
-                grown = np.empty((min(max(2 * len(self._read), n + new.size, 256), len(self._at)), self.m))
-                grown[:n] = self._read[:n]
-                self._read = grown
-            self._read[n:n + new.size] = self._WT[new]
-            self._at[new] = np.arange(n, n + new.size)
-            self._nread += new.size
-        return self._at[rows]
-
     def _rows(self, rows) -> np.ndarray:
-        slots = self._slots(rows)                   # may grow `_read`: before indexing it
-        w = self._read[slots]
+        slots = self._read.slots(rows)
+        w = self._read.data[slots]
         return w if self.reach.all() else w[:, self.reach]
 
     def block(self, rows, cols) -> np.ndarray:
         """(len(rows), len(cols)) compliance between candidates (WT's columns are all m of them):
         only those entries are gathered."""
-        slots = self._slots(self._row[np.asarray(cols, int)])
-        return self._read[np.ix_(slots, np.asarray(rows, int))].T
+        slots = self._read.slots(self._row[np.asarray(cols, int)])
+        return self._read.data[np.ix_(slots, np.asarray(rows, int))].T
 
     def observed(self, idx) -> np.ndarray:
         return np.asarray(self._RT[self._row[np.asarray(idx, int)]]).T
@@ -308,8 +291,8 @@ class StoredCompliance(DenseReach, Compliance):
         nodal contact forces (m, k): the rows of the candidates that carry force only."""
         F = np.asarray(force_N, float).reshape(self.m, -1)[self.reach]
         act = np.flatnonzero(np.any(F != 0, axis=1))
-        slots = self._slots(act)
-        return self._read[slots].T @ F[act], np.asarray(self._RT[act]).T @ F[act]
+        slots = self._read.slots(act)
+        return self._read.data[slots].T @ F[act], np.asarray(self._RT[act]).T @ F[act]
 
     def observe(self, force_N) -> np.ndarray:
         """(r,) or (r, k) observed response to nodal contact forces (m,) or (m, k)."""
