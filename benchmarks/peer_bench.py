@@ -70,12 +70,12 @@ def peer_indent(model_dir, scene, max_iterations: int = 50) -> dict:
     first experiment of `scene` (a depth-controlled one along a coordinate axis). Returns
     {"force_N": [...], "factorisations": int, "iterations": [...] per depth, "active": [...]}."""
     import pypardiso
-    from skfem import BilinearForm, asm
+    from skfem import Basis, BilinearForm, asm
     from skfem.helpers import ddot, div, sym_grad
 
     model, info = read_model(model_dir, scene.material, scene.nu)       # meshio + the same regions
     dim = model.dim
-    basis = model.basis                             # skfem Basis of ElementVector(P2) on the mesh
+    basis = Basis(model.mesh, model.element, intorder=2)                # skfem's vector P2 basis
 
     @BilinearForm
     def elasticity(u, v, w):

@@ -17,7 +17,7 @@ _VTK_CELL = {3: "tetra10", 2: "triangle6"}
 
 def quadratic_cells(model) -> np.ndarray:
     """(M, 10) or (M, 6) P2 node ids per element in VTK order (vertices, then edge midpoints)."""
-    return (model.basis.element_dofs[::model.dim] // model.dim).T
+    return model.element_nodes.T
 
 
 def write_vtu(path, solution) -> None:

@@ -71,11 +71,18 @@ class PointEvaluator:
         return np.einsum("nij,nj->in", self._Ainv[cells], x - self._p0[cells])
 
     def shape(self, x, cells):
-        """Values (nb, dim, n) and gradients (nb, dim, dim, n) of the element basis at x."""
-        basis = self.model.basis
+        """Values (nb, dim, n) and gradients (nb, dim, dim, n) of the vector element's shape
+        functions at x (function a * dim + i is the scalar P2 function a along axis i, the order
+        of `Model.element_dofs`)."""
+        basis, d = self.model.scalar_basis, self.model.dim
         X = self.reference(x, cells)[:, :, None]
-        fields = [basis.elem.gbasis(basis.mapping, X, k, tind=cells)[0] for k in range(basis.Nbfun)]
-        return (np.array([np.asarray(f)[..., 0] for f in fields]), np.array([f.grad[..., 0] for f in fields]))
+        fields = [basis.elem.gbasis(basis.mapping, X, a, tind=cells)[0] for a in range(basis.Nbfun)]
+        N = np.array([np.asarray(f)[..., 0] for f in fields])                   # (nb, n)
+        dN = np.array([f.grad[..., 0] for f in fields])                         # (nb, d, n)
+        eye = np.eye(d)[None, :, :, None]                                       # (1, i, j, 1)
+        value = (eye * N[:, None, None, :]).reshape(-1, d, N.shape[1])
+        grad = (eye[..., None, :] * dN[:, None, None, :, :]).reshape(-1, d, d, N.shape[1])
+        return value, grad
 
     def operator(self, x, cells, quantity) -> sp.csr_matrix:
         """Sparse (n * ncomp, ndof) map from u to `quantity` ("displacement", "strain" or
@@ -83,7 +90,7 @@ class PointEvaluator:
         m = self.model
         n, d = len(x), m.dim
         value, grad = self.shape(x, cells)
-        dofs = m.basis.element_dofs[:, cells]                           # (nb, n)
+        dofs = m.element_dofs[:, cells]                           # (nb, n)
         if quantity == "displacement":
             rows = (np.arange(n)[None, None] * d + np.arange(d)[None, :, None])
             rows = np.broadcast_to(rows, value.shape)
@@ -160,7 +167,7 @@ class Solution:
         m, d, n = self.model, self.model.dim, len(x)
         at = m.point_evaluator
         value, grad = at.shape(x, cells)                                  # (nb, d, n), (nb, d, d, n)
-        ue = self.u[m.basis.element_dofs[:, cells]]                       # (nb, n)
+        ue = self.u[m.element_dofs[:, cells]]                       # (nb, n)
         disp = np.zeros((n, 3))
         disp[:, :d] = np.einsum("kin,kn->ni", value, ue)
         g = np.einsum("kijn,kn->nij", grad, ue)

@@ -313,16 +313,20 @@ class SaddleFactor:
         self._T = None if rotation is None else sp.csr_matrix(rotation)
         if self._T is not None:
             Kdev, B = (self._T.T @ Kdev @ self._T).tocsr(), (B @ self._T).tocsr()
-        A = sp.bmat([[Kdev, B.T], [B, -sp.diags(D)]], format="csr")
         if not _pardiso_available(stacklevel=3):
             from scipy.sparse.linalg import splu
 
-            self.backend, self._solve = "scipy-splu", splu(A.tocsc()).solve
+            A = sp.bmat([[Kdev, B.T], [B, -sp.diags(D)]], format="csc")
+            self.backend, self._solve = "scipy-splu", splu(A).solve
             return
         from pypardiso.pardiso_wrapper import PyPardisoError
 
-        try:                                # symmetric types read the upper triangle
-            self._pardiso = Pardiso(sp.triu(A, format="csr"), condensed)
+        # symmetric types read the upper triangle, built without the full matrix (half the
+        # memory and time of triu(bmat(...)); the local blocks are freed before the factorisation)
+        upper = sp.bmat([[sp.triu(Kdev), B.T], [None, -sp.diags(D)]], format="csr")
+        del Kdev, B
+        try:
+            self._pardiso = Pardiso(upper, condensed)
         except (PyPardisoError, np.linalg.LinAlgError) as exc:
             raise InputError(f"the stiffness matrix is singular ({exc}); check that every part of the "
                              "mesh is held") from None

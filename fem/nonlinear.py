@@ -74,15 +74,13 @@ class NeoHookean:
     chunks of `chunk` elements (the 3D tangent holds 900 numbers per element)."""
 
     def __init__(self, model, chunk: int = 4000):
-        from skfem import Basis, ElementTetP2, ElementTriP2
-
         from fem.materials import FLUID_LAYER
 
         if (model.layer == FLUID_LAYER).any():
             raise InputError("the large-deformation solver has no fluid core (layer 6); "
                              "use the linear solver for the solid-fluid models")
         self.model, self.dim, self.chunk = model, model.dim, int(chunk)
-        scalar = Basis(model.mesh, ElementTetP2() if self.dim == 3 else ElementTriP2(), intorder=2)
+        scalar = model.scalar_basis
         grads = [scalar.basis[a][0].grad for a in range(scalar.Nbfun)]
         self.grad = np.array(grads).transpose(2, 3, 0, 1)                                     # (M, nq, nb, d)
         self.dx = scalar.dx                                                                   # (M, nq)
@@ -92,7 +90,7 @@ class NeoHookean:
         self.q = np.array([np.asarray(pb.basis[c][0]) for c in range(pb.Nbfun)]).transpose(1, 2, 0)  # (M, nq, nc)
         self.pdofs = pb.element_dofs.T                                                        # (M, nc)
         self.D = model.pressure_compliance
-        self.udofs = model.basis.element_dofs.T                                               # (M, nb*d)
+        self.udofs = model.element_dofs.T                                               # (M, nb*d)
         self.mu = model.mu
         self.ndof, self.npres = model.ndof, pb.N
 

@@ -4,6 +4,8 @@ issue's 1 % (displacement) and 3 % (mean stress), met with a margin by the meshe
 import meshio
 import numpy as np
 import pytest
+from skfem import Basis, BilinearForm, asm
+from skfem.helpers import div
 
 from fem import InputError, Model
 from fem import reference as ref
@@ -213,9 +215,22 @@ def test_p2_nodes_without_the_basis_are_the_basis_dofs(block3d):
     pts, cells, _ = ref.box(np.linspace(0, 1, 4), np.linspace(0, 2, 3))
     for m in (Model(block3d.mesh.p.T, block3d.mesh.t.T, block3d.layer), Model(pts, cells, np.ones(len(cells)))):
         nodes, ndof = m.nodes, m.ndof
-        assert "basis" not in vars(m)
-        assert ndof == m.basis.N == m.dim * m.nnodes
-        np.testing.assert_array_equal(nodes, m.basis.doflocs[:, ::m.dim].T)
+        assert "scalar_basis" not in vars(m)
+        vector = Basis(m.mesh, m.element, intorder=2)
+        assert ndof == vector.N == m.dim * m.nnodes
+        np.testing.assert_array_equal(nodes, vector.doflocs[:, ::m.dim].T)
+        np.testing.assert_array_equal(m.element_dofs, vector.element_dofs)
+        np.testing.assert_array_equal(m.element_nodes, m.scalar_basis.element_dofs)
+
+
+def test_divergence_matrix_is_skfem_assembly(block3d):
+    """B (int q div u) assembled from the scalar P2 shape functions equals skfem's assembly of
+    the bilinear form div(u) q on the vector basis, in 3D and 2D."""
+    pts, cells, _ = ref.box(np.linspace(0, 1, 4), np.linspace(0, 2, 3))
+    for m in (Model(block3d.mesh.p.T, block3d.mesh.t.T, block3d.layer), Model(pts, cells, np.ones(len(cells)))):
+        divergence = BilinearForm(lambda u, q, w: div(u) * q)
+        expected = asm(divergence, Basis(m.mesh, m.element, intorder=2), m.pressure_basis)
+        assert abs(m._B - expected).max() < 1e-14 * abs(expected).max()
 
 
 def test_rigid_bone_matches_very_stiff_bone():
@@ -227,7 +242,7 @@ def test_rigid_bone_matches_very_stiff_bone():
     rigid_model = Model(pts, cells, layer, {"patch": patch}, material="m33338", rigid_bone=True)
     bc = {"prescribed": {"patch": (0, -0.05)}}     # the rigid bone alone holds the model
     rigid = rigid_model.solve(**bc)
-    bone_nodes = np.unique(rigid_model.basis.element_dofs[:, layer == 5])
+    bone_nodes = np.unique(rigid_model.element_dofs[:, layer == 5])
     assert np.all(rigid.u[bone_nodes] == 0)
     assert np.abs(rigid.u - stiff.u).max() < 1e-4 * np.abs(stiff.u).max()     # bone 1e5 x stiffer
 
