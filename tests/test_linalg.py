@@ -184,3 +184,29 @@ def test_blas_limit_reaches_pardiso_loaded_after_a_first_limit():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
                          cwd=str(Path(__file__).resolve().parents[1])).stdout.split("\n")[0]
     assert out == "1 [1]"
+
+
+def test_drop_round_off_leaves_a_pattern_free_of_summation_order():
+    """Entries at round-off of the diagonal scale (and explicit zeros) go, the diagonal and every
+    entry above the threshold stay: two matrices that differ only by round-off-sized entries get
+    the same pattern, hence the same PARDISO ordering."""
+    from fem.linalg import drop_round_off
+
+    rng = np.random.default_rng(3)
+    n = 60
+    A = sp.random(n, n, density=0.1, random_state=rng) + sp.diags(rng.uniform(1, 1e5, n))
+    A = sp.triu(A + A.T, format="csr")
+    A.data[np.abs(A.data) < 1e-3] = 1e-3                      # no genuine entry near round-off
+    rows, cols = rng.integers(0, n, 40), rng.integers(0, n, 40)
+    new = (rows < cols) & (A[rows, cols].A1 == 0)               # absent upper entries
+    rows, cols = rows[new], cols[new]
+    noise = rng.uniform(-1e-15, 1e-15, len(rows)) * np.sqrt(A.diagonal()[rows] * A.diagonal()[cols])
+    noise[0] = 0.0                                              # an explicit zero
+    coo = A.tocoo()
+    noisy = sp.csr_matrix((np.r_[coo.data, noise], (np.r_[coo.row, rows], np.r_[coo.col, cols])), shape=A.shape)
+    assert noisy.nnz > A.nnz
+    a, b = drop_round_off(A), drop_round_off(noisy)
+    np.testing.assert_array_equal(a.indptr, b.indptr)
+    np.testing.assert_array_equal(a.indices, b.indices)
+    assert abs(a - A).max() == 0 and a.nnz == A.nnz
+    np.testing.assert_allclose(a.diagonal(), A.diagonal(), rtol=0)

@@ -1,0 +1,175 @@
+#!/usr/bin/env python
+"""PARDISO settings on a first run's own matrix: time, factor size, flops and memory per setting.
+
+    python benchmarks/pardiso_options.py MODEL_DIR                       # C5 perpendicular 0:3:0.5
+    python benchmarks/pardiso_options.py MODEL_DIR --options default no-schur ooc-no-schur
+    python benchmarks/pardiso_options.py MODEL_DIR --indentor C5 --orientation perpendicular --depth 0:3:0.5
+
+First the `indent` back end runs on the model folder (no stored response model) up to its
+factorisation, and the upper triangle of the saddle matrix it hands to PARDISO and the condensed
+rows (the reachable contact candidates) are saved in --work. Then every setting runs in its own
+process (so that its peak memory is its own): PARDISO analysis (phase 11) and, unless the
+setting says analysis only, factorisation (phase 22, with the Schur complement when the setting
+keeps it), with the project's iparm (`fem.linalg.Pardiso`) plus the setting's changes. Printed
+per setting: analysis and factorisation wall time, nnz(L) (iparm[17]), factorisation GFlop
+(iparm[18]), PARDISO's own peak memory for the factorisation (iparm[16]) and the process's
+peak resident set (getrusage). Appended to benchmarks/results/pardiso_options.md.
+
+Settings (SETTINGS below): the project's (METIS nested dissection, Schur complement), no Schur
+complement, parallel METIS and minimum degree orderings (analysis only), two-level
+factorisation, and out of core (iparm[59] = 2) with and without the Schur complement, with
+MKL_PARDISO_OOC_MAX_CORE_SIZE = --ooc-core-mb in core. Out-of-core files go to the working
+directory of the setting's process (--work) and are removed by PARDISO.
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import os
+import platform
+import resource
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse as sp
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+import fem.linalg as linalg  # noqa: E402
+
+RESULTS = ROOT / "benchmarks" / "results" / "pardiso_options.md"
+SETTINGS = {     # name -> (iparm changes, Schur complement kept, factorise)
+    "default": ({}, True, True),
+    "no-schur": ({}, False, True),
+    "parallel-metis": ({1: 3}, True, False),
+    "min-degree-no-schur": ({1: 0}, False, False),
+    "two-level": ({23: 1}, True, True),
+    "ooc-no-schur": ({59: 2}, False, True),
+    "ooc": ({59: 2}, True, True),
+}
+
+
+class _Captured(Exception):
+    pass
+
+
+def capture(model_dir: str, work: Path, indentor: str, orientation: str, depth: str) -> None:
+    """Save the saddle matrix's upper triangle (upper.npz) and condensed rows (schur.npy) that the
+    `indent` back end factorises for this scene."""
+    from commands.indent import indent_folder, scene_of_flags
+
+    class Capture(linalg.Pardiso):
+        def __init__(self, upper, schur=None, mkl_defaults=False):
+            sp.save_npz(work / "upper.npz", sp.csr_matrix(upper))
+            np.save(work / "schur.npy", np.zeros(0, int) if schur is None else np.asarray(schur))
+            raise _Captured
+
+    linalg.Pardiso = Capture
+    scene = scene_of_flags(indentor, orientation=orientation, depth=depth)
+    scene = dataclasses.replace(scene, output=dataclasses.replace(scene.output, pvd=False, plots=False))
+    try:
+        indent_folder(model_dir, work / "run", scene, progress=False)
+    except _Captured:
+        return
+    raise SystemExit("the run did not factorise (is a stored response model answering it?)")
+
+
+class _AnalysisDone(Exception):
+    pass
+
+
+class _Timed(linalg.Pardiso):
+    """The project's Pardiso with iparm changes applied before the analysis and each phase timed;
+    phase 12 (analysis and factorisation) runs as 11 then 22, so that both are timed.
+    analysis_only: stop after the analysis (raises _AnalysisDone, with `self` in `.solver`)."""
+
+    changes: dict = {}
+    analysis_only = False
+    times: dict = {}
+    last = None
+
+    def _phase(self, phase, b, x, nrhs):
+        if phase == 12:
+            self._phase(11, b, x, nrhs)
+            self._phase(22, b, x, nrhs)
+            return
+        if phase == 11:
+            for k, v in self.changes.items():
+                self.iparm[k] = v
+            self.iparm[18] = -1                     # report the factorisation's MFlop
+        elif phase == 22 and self.analysis_only:
+            _Timed.last = self
+            raise _AnalysisDone
+        t = time.perf_counter()
+        super()._phase(phase, b, x, nrhs)
+        _Timed.times[phase] = time.perf_counter() - t
+
+
+def run_setting(work: Path, name: str) -> dict:
+    """One setting in this process; returns its measurements."""
+    changes, keep_schur, factorise = SETTINGS[name]
+    upper = sp.load_npz(work / "upper.npz")
+    schur = np.load(work / "schur.npy") if keep_schur else None
+    _Timed.changes, _Timed.analysis_only, _Timed.times = changes, not factorise, {}
+    try:
+        solver = _Timed(upper, schur)
+    except _AnalysisDone:
+        solver = _Timed.last
+    t = _Timed.times
+    out = {"setting": name, "analysis_s": t[11], "factorisation_s": t.get(22, float("nan")),
+           "nnz_L_M": solver.iparm[17] / 1e6, "gflop": solver.iparm[18] / 1e3,
+           "pardiso_factor_MB": solver.iparm[16] / 1024 if factorise else float("nan"),
+           "process_peak_MB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+    solver.release()
+    return out
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("model_dir")
+    ap.add_argument("--options", nargs="+", default=list(SETTINGS), choices=list(SETTINGS))
+    ap.add_argument("--indentor", default="C5")
+    ap.add_argument("--orientation", default="perpendicular")
+    ap.add_argument("--depth", default="0:3:0.5")
+    ap.add_argument("--ooc-core-mb", type=int, default=1000, help="in-core memory of the out-of-core settings")
+    ap.add_argument("--work", default="out/pardiso_options")
+    ap.add_argument("--no-write", action="store_true", help="print only, do not append to results/pardiso_options.md")
+    ap.add_argument("--one", help=argparse.SUPPRESS)           # a setting, in its own process
+    args = ap.parse_args(argv)
+    work = Path(args.work).resolve()
+    if args.one:
+        print(json.dumps(run_setting(work, args.one)))
+        return
+    work.mkdir(parents=True, exist_ok=True)
+    capture(args.model_dir, work, args.indentor, args.orientation, args.depth)
+    upper, schur = sp.load_npz(work / "upper.npz"), np.load(work / "schur.npy")
+    lines = [f"## {time.strftime('%Y-%m-%d %H:%M')}: {platform.machine()}, {os.cpu_count()} cores, "
+             f"load average {os.getloadavg()[0]:.1f} at the start",
+             "", f"{args.model_dir}: {args.indentor} {args.orientation} at {args.depth} mm; saddle matrix "
+             f"{upper.shape[0]} rows, {upper.nnz} upper non-zeros, {len(schur)} condensed rows", "",
+             "| setting | analysis s | factorisation s | nnz(L) M | GFlop | PARDISO factor MB | process peak MB |",
+             "|---|---:|---:|---:|---:|---:|---:|"]
+    print("\n".join(lines), flush=True)
+    env = {**os.environ, "MKL_PARDISO_OOC_MAX_CORE_SIZE": str(args.ooc_core_mb)}
+    for name in args.options:
+        done = subprocess.run([sys.executable, __file__, args.model_dir, "--work", str(work), "--one", name],
+                              capture_output=True, text=True, env=env, cwd=work)
+        if done.returncode:
+            lines.append(f"| {name} | failed: {done.stderr.strip().splitlines()[-1]} |||||")
+        else:
+            r = json.loads(done.stdout.strip().splitlines()[-1])
+            lines.append(f"| {name} | {r['analysis_s']:.2f} | {r['factorisation_s']:.2f} | {r['nnz_L_M']:.0f} "
+                         f"| {r['gflop']:.0f} | {r['pardiso_factor_MB']:.0f} | {r['process_peak_MB']:.0f} |")
+        print(lines[-1], flush=True)
+    if not args.no_write:
+        with open(RESULTS, "a") as f:
+            f.write("\n".join(lines) + "\n\n")
+
+
+if __name__ == "__main__":
+    main()
