@@ -75,6 +75,37 @@ def test_lcp_matches_nnls_and_satisfies_kkt(seed):
     np.testing.assert_allclose(f, ref, atol=1e-8)
 
 
+def test_active_factor_solves_over_changing_active_sets():
+    """Successive active sets on one LCPBlocks (members added: bordered factor; dropped: held by
+    their capacitance; many dropped: factorised afresh) solve C[S, S] x = b as a dense solve
+    does, and the same factor is returned for an unchanged set."""
+    rng = np.random.default_rng(7)
+    n = 80
+    G = rng.normal(size=(n, n))
+    C = G @ G.T / n + 0.05 * np.eye(n)
+    blocks = contact.LCPBlocks(lambda i: C[:, i], n)
+    active = rng.random(n) < 0.4
+    seen = {"held": False, "bordered": False, "rebased": False}
+    for step in range(30):
+        last = blocks._last
+        factor = blocks.factor(active)
+        assert blocks.factor(active.copy()) is factor
+        idx = np.flatnonzero(active)
+        b = rng.normal(size=(len(idx), 2))
+        np.testing.assert_allclose(factor.solve(b), np.linalg.solve(C[np.ix_(idx, idx)], b), rtol=1e-9, atol=1e-9)
+        seen["held"] |= len(factor.base) > len(idx)
+        if last is not None:
+            extends = np.array_equal(factor.base[:len(last.base)], last.base)
+            seen["bordered"] |= extends and len(factor.base) > len(last.base)
+            seen["rebased"] |= not extends
+        flip = rng.choice(n, size=rng.integers(1, 4) if step % 10 else 25, replace=False)
+        active = active.copy()
+        active[flip] ^= True
+        if not active.any():
+            active[0] = True
+    assert all(seen.values()), seen
+
+
 # --------------------------------------------------------------------------- Hertz on the half-space
 @pytest.mark.parametrize("nu", [0.3, 0.49])
 def test_hertz_sphere_on_half_space(nu):
