@@ -84,14 +84,16 @@ class _AnalysisDone(Exception):
 
 
 class _Timed(linalg.Pardiso):
-    """The project's Pardiso with iparm changes applied before the analysis and each phase timed;
-    phase 12 (analysis and factorisation) runs as 11 then 22, so that both are timed.
-    analysis_only: stop after the analysis (raises _AnalysisDone, with `self` in `.solver`)."""
+    """The project's Pardiso with iparm `changes` applied before the analysis and each phase
+    timed (`times`); phase 12 (analysis and factorisation) runs as 11 then 22, so that both are
+    timed. analysis_only: stop before the factorisation."""
 
-    changes: dict = {}
-    analysis_only = False
-    times: dict = {}
-    last = None
+    def __init__(self, upper, schur, changes: dict, analysis_only: bool):
+        self.changes, self.analysis_only, self.times = changes, analysis_only, {}
+        try:
+            super().__init__(upper, schur)
+        except _AnalysisDone:
+            pass
 
     def _phase(self, phase, b, x, nrhs):
         if phase == 12:
@@ -103,11 +105,10 @@ class _Timed(linalg.Pardiso):
                 self.iparm[k] = v
             self.iparm[18] = -1                     # report the factorisation's MFlop
         elif phase == 22 and self.analysis_only:
-            _Timed.last = self
             raise _AnalysisDone
         t = time.perf_counter()
         super()._phase(phase, b, x, nrhs)
-        _Timed.times[phase] = time.perf_counter() - t
+        self.times[phase] = time.perf_counter() - t
 
 
 def run_setting(work: Path, name: str) -> dict:
@@ -115,13 +116,8 @@ def run_setting(work: Path, name: str) -> dict:
     changes, keep_schur, factorise = SETTINGS[name]
     upper = sp.load_npz(work / "upper.npz")
     schur = np.load(work / "schur.npy") if keep_schur else None
-    _Timed.changes, _Timed.analysis_only, _Timed.times = changes, not factorise, {}
-    try:
-        solver = _Timed(upper, schur)
-    except _AnalysisDone:
-        solver = _Timed.last
-    t = _Timed.times
-    out = {"setting": name, "analysis_s": t[11], "factorisation_s": t.get(22, float("nan")),
+    solver = _Timed(upper, schur, changes, analysis_only=not factorise)
+    out = {"setting": name, "analysis_s": solver.times[11], "factorisation_s": solver.times.get(22, float("nan")),
            "nnz_L_M": solver.iparm[17] / 1e6, "gflop": solver.iparm[18] / 1e3,
            "pardiso_factor_MB": solver.iparm[16] / 1024 if factorise else float("nan"),
            "process_peak_MB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}

@@ -134,10 +134,9 @@ class ActiveFactor:
     def __init__(self, R: np.ndarray, base: np.ndarray, active: np.ndarray):
         self.R, self.base = R, base
         self.active = active.copy()
-        held = ~active[base]                                    # positions of D in T
-        self._at = np.flatnonzero(active[base])                 # positions of S in T
-        self._order = np.argsort(base[self._at])                # S in index order -> its T positions
-        self._held = np.flatnonzero(held)
+        at = np.flatnonzero(active[base])                       # positions of S in T
+        self._pos = at[np.argsort(base[at])]                    # ... of S in increasing index order
+        self._held = np.flatnonzero(~active[base])              # positions of D in T
         self._W = self._cap = None
         if self._held.size:
             E = np.zeros((len(base), self._held.size))
@@ -148,11 +147,11 @@ class ActiveFactor:
     def solve(self, b: np.ndarray) -> np.ndarray:
         """x with C[S, S] x = b; b (|S|,) or (|S|, r) over the active indices in increasing order."""
         y = np.zeros((len(self.base),) + b.shape[1:])
-        y[self._at[self._order]] = b
+        y[self._pos] = b
         y = sla.cho_solve((self.R, False), y, check_finite=False)
         if self._held.size:
             y -= self._W @ sla.cho_solve(self._cap, y[self._held], check_finite=False)
-        return y[self._at[self._order]]
+        return y[self._pos]
 
 
 class LCPBlocks:

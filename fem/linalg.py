@@ -297,9 +297,13 @@ def drop_round_off(upper: sp.csr_matrix, rtol: float = ROUND_OFF) -> sp.csr_matr
     exact matrix."""
     upper = upper.tocsr(copy=True)
     d = np.sqrt(np.abs(upper.diagonal()))
-    rows = np.repeat(np.arange(upper.shape[0]), np.diff(upper.indptr))
-    small = np.abs(upper.data) <= rtol * d[rows] * d[upper.indices]
-    upper.data[small & (rows != upper.indices)] = 0.0
+    rows = np.repeat(np.arange(upper.shape[0], dtype=upper.indices.dtype), np.diff(upper.indptr))
+    scale = d[rows]                     # in place from here: fresh temporaries of the matrix's size
+    scale *= d[upper.indices]           # cost page faults (5x the time on the human 0.5 mm matrix)
+    scale *= rtol
+    small = np.abs(upper.data) <= scale
+    small &= rows != upper.indices
+    upper.data[small] = 0.0
     upper.eliminate_zeros()
     return upper
 

@@ -80,10 +80,8 @@ class NeoHookean:
             raise InputError("the large-deformation solver has no fluid core (layer 6); "
                              "use the linear solver for the solid-fluid models")
         self.model, self.dim, self.chunk = model, model.dim, int(chunk)
-        scalar = model.scalar_basis
-        grads = [scalar.basis[a][0].grad for a in range(scalar.Nbfun)]
-        self.grad = np.array(grads).transpose(2, 3, 0, 1)                                     # (M, nq, nb, d)
-        self.dx = scalar.dx                                                                   # (M, nq)
+        self.grad = model.shape_gradients().transpose(2, 3, 0, 1)                             # (M, nq, nb, d)
+        self.dx = model.scalar_basis.dx                                                       # (M, nq)
         # the linear solver's layer-discontinuous P1 pressure basis and lumped 1/kappa mass (same
         # element order and quadrature): its small-strain limit is then Model's discretisation
         pb = model.pressure_basis
