@@ -328,14 +328,24 @@ class SaddleFactor:
     onto them with the factorisation (see `Pardiso`); the SciPy fallback ignores it.
     rotation: optional sparse orthogonal T (n, n), x = T x_local: the system is factorised in the
     local unknowns (T^T K T) and `condensed` indexes those; solves and residuals stay global.
+    free: optional sorted (n,) indices: K is the restriction of Kdev (N, N) and B (m, N) to these
+    rows and columns (a model's unconstrained DOFs). Kdev and B are then referenced, not copied:
+    the restricted copies exist only while the factorised matrix is built (on the human 0.5 mm
+    model they would hold 0.3 GB through the factorisation and every later solve), and residuals
+    multiply by the whole matrices.
     A singular matrix raises InputError.
     """
 
     REFINE_TOL = 1e-10
     MAX_REFINE = 2
 
-    def __init__(self, Kdev: sp.csr_matrix, B: sp.csr_matrix, D: np.ndarray, condensed=None, rotation=None):
+    def __init__(self, Kdev: sp.csr_matrix, B: sp.csr_matrix, D: np.ndarray, condensed=None, rotation=None,
+                 free=None):
         self.Kdev, self.B, self.D = Kdev, B, D
+        self._free = None if free is None else np.asarray(free)
+        self.n = Kdev.shape[0] if free is None else len(self._free)
+        if free is not None:
+            Kdev, B = Kdev[self._free][:, self._free], B[:, self._free]
         self.refinements = 0        # refinement steps taken by the last call
         self.refine_tol = self.REFINE_TOL
         self.condensed = np.zeros(0, dtype=int)
@@ -374,9 +384,14 @@ class SaddleFactor:
         return self._pardiso.schur_inverse()
 
     def apply(self, x: np.ndarray) -> np.ndarray:
-        """K x."""
+        """K x (x (n,) or (n, k))."""
+        if self._free is not None:
+            whole = np.zeros((self.Kdev.shape[0],) + x.shape[1:])
+            whole[self._free] = x
+            x = whole
         Bx = self.B @ x
-        return self.Kdev @ x + self.B.T @ (Bx / (self.D if x.ndim == 1 else self.D[:, None]))
+        Kx = self.Kdev @ x + self.B.T @ (Bx / (self.D if x.ndim == 1 else self.D[:, None]))
+        return Kx if self._free is None else Kx[self._free]
 
     def _raw(self, b: np.ndarray) -> np.ndarray:
         rhs = np.zeros((len(b) + len(self.D),) + b.shape[1:], order="F")
@@ -405,14 +420,14 @@ class SaddleFactor:
             raise ValueError("nothing is condensed in this factorisation")
         e = np.zeros((len(self.condensed), len(cols)))
         e[cols, np.arange(len(cols))] = 1.0
-        x = self._pardiso.solve_schur(e)[:self.Kdev.shape[0]]
+        x = self._pardiso.solve_schur(e)[:self.n]
         if self._T is not None:
             x = self._T @ x
         if not check:
             self.refinements, self.last_residual = 0, float("nan")
             return x
         b = sp.csc_matrix((np.ones(len(cols)), (self.condensed[cols], np.arange(len(cols)))),
-                          shape=(self.Kdev.shape[0], len(cols)))
+                          shape=(self.n, len(cols)))
         b = (b if self._T is None else self._T @ b).toarray()
         return self._refine(x, b)
 

@@ -600,8 +600,7 @@ class Model:
             self._check_held(fixed)
             nodes, a, pos, T = plan if plan is not None else (np.zeros(0, int), None, np.zeros(0, int), None)
             order = np.argsort(pos)
-            factor = SaddleFactor(self.K_dev[free][:, free], self._B[:, free], self.pressure_compliance,
-                                  pos[order], T)
+            factor = SaddleFactor(self.K_dev, self._B, self.pressure_compliance, pos[order], T, free=free)
             by_node = np.argsort(nodes[order])                  # block index of each sorted node
             factor.condensed_nodes, factor.condensed_direction = nodes[order][by_node], a
             factor.condensed_order = by_node
