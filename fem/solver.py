@@ -412,22 +412,43 @@ class Model:
         return float(self._fluid_row @ u)
 
     @cached_property
+    def _node_pairs(self) -> tuple:
+        """The pattern of K_dev, which depends on the mesh only: (pos (M, nb^2) index of each
+        element's node pairs (a, b) among the sorted distinct pairs, item (dim, npairs) where the
+        dim entries of row i of pair p's block start in K_dev's CSR data, divided by dim, indptr,
+        indices) - row a * dim + i of the CSR holds, for every neighbour b of node a in increasing
+        order, the columns b * dim + j."""
+        d, nn, M = self.dim, self.nnodes, self.mesh.nelements
+        nodes = self.element_nodes.T                                             # (M, nb)
+        pairs, pos = np.unique((nodes[:, :, None] * nn + nodes[:, None, :]).reshape(M, -1), return_inverse=True)
+        row, col = pairs // nn, pairs % nn
+        start = np.searchsorted(row, np.arange(nn + 1))                         # each node's first pair
+        deg = np.diff(start)
+        item = d * start[row] + np.arange(d)[:, None] * deg[row] + (np.arange(len(pairs)) - start[row])
+        nnz = d * d * len(pairs)
+        index = np.int32 if nnz < 2 ** 31 else np.int64
+        indptr = np.append((d * d * start[:-1, None] + d * np.arange(d) * deg[:, None]).ravel(), nnz)
+        block_col = np.empty(d * len(pairs), np.int64)
+        block_col[item] = col
+        indices = (d * block_col[:, None] + np.arange(d)).ravel()
+        return pos.reshape(M, -1), item, indptr.astype(index), indices.astype(index)
+
+    @cached_property
     def K_dev(self) -> sp.csr_matrix:
         """(ndof, ndof) deviatoric stiffness int 2 mu dev eps(u) : dev eps(v) [N/mm].
 
         Vectorised over elements (skfem's generic assembly is slower for this form): with
         M[a,i,b,j] = int 2 mu dN_a/dx_i dN_b/dx_j (one batched X^T X per element), the block of
         nodes a, b is k[i,j] = d_ij sum_k M[akbk] / 2 + M[ajbi] / 2 - M[aibj] / d. Blocks are
-        summed per node pair (bincount) into a dim x dim-block matrix."""
+        summed per node pair (bincount) and written straight into CSR order (`_node_pairs`)."""
         d, b = self.dim, self.scalar_basis
-        nb, M, nn = b.Nbfun, self.mesh.nelements, self.ndof // d
+        nb, M = b.Nbfun, self.mesh.nelements
+        pos, item, indptr, indices = self._node_pairs
+        npairs = item.shape[1]
         G = self.shape_gradients()                                               # (nb, d, M, nqp)
         X = np.ascontiguousarray((G * np.sqrt(2 * self.mu[:, None] * b.dx)).transpose(2, 0, 1, 3))
         X = X.reshape(M, nb * d, -1)                                             # (M, nb d, nqp)
-        nodes = self.element_nodes.T                                             # (M, nb)
-        pairs, pos = np.unique((nodes[:, :, None] * nn + nodes[:, None, :]).reshape(M, -1), return_inverse=True)
-        pos = pos.reshape(M, -1)
-        data = np.zeros((d * d, len(pairs)))
+        data = np.zeros((d * d, npairs))
         for chunk in np.array_split(np.arange(M), max(1, M // 10000)):
             m = np.matmul(X[chunk], X[chunk].transpose(0, 2, 1))
             m = m.reshape(len(chunk), nb, d, nb, d).transpose(0, 2, 4, 1, 3)     # (e, i, j, a, b)
@@ -438,9 +459,13 @@ class Model:
             k = np.ascontiguousarray(k.transpose(1, 2, 0, 3, 4)).reshape(d * d, -1)
             p = pos[chunk].ravel()
             for c in range(d * d):
-                data[c] += np.bincount(p, weights=k[c], minlength=len(pairs))
-        indptr = np.searchsorted(pairs // nn, np.arange(nn + 1))
-        return sp.bsr_matrix((data.T.reshape(-1, d, d), pairs % nn, indptr), shape=(self.ndof, self.ndof)).tocsr()
+                data[c] += np.bincount(p, weights=k[c], minlength=npairs)
+        csr = np.empty((d * npairs, d))
+        for i in range(d):
+            csr[item[i]] = data[i * d:(i + 1) * d].T
+        K = sp.csr_matrix((csr.ravel(), indices.copy(), indptr.copy()), shape=(self.ndof, self.ndof))
+        K.has_sorted_indices = True
+        return K
 
     @cached_property
     def K(self) -> LinearOperator:
