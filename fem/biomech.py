@@ -157,7 +157,8 @@ class DeflectionExperiment:
         self.model_dir, self.nu, self.band_mm, self.side = model_dir, nu, band_mm, side
         self.rigid_bone = bool(rigid_bone)
         self.indentor_code = indentor
-        model, info = read_model(model_dir)                         # geometry only
+        model, info = read_model(model_dir)
+        self._model = model           # the last material's model: the next shares its mesh-only parts
         region = CONTACT_REGION[model.dim]
         self.dim, self.region, self.info = model.dim, region, info
         self.n_layers = int(model.layer[model.layer != FLUID_LAYER].max())    # code digits: layers 1..n
@@ -224,14 +225,14 @@ class DeflectionExperiment:
         """A new fem.contact.ContactModel of the model with these log10 moduli [Pa] (one factorisation)."""
         from fem.contact import ContactModel
         from fem.materials import Material
-        from fem.modelfolder import open_model
+        from fem.modelfolder import factorise
 
         nu = self.info.get("nu", 0.48) if self.nu is None else self.nu
-        model, system, region, _ = open_model(self.model_dir, material=Material(moduli_MPa(log10_Pa), nu=nu,
-                                                                                rigid_bone=self.rigid_bone),
-                                              progress=self.progress)
+        model = self._model.with_material(Material(moduli_MPa(log10_Pa), nu=nu, rigid_bone=self.rigid_bone))
+        system = factorise(model, self.info, progress=self.progress)
+        self._model = model
         self.evaluations += 1
-        return ContactModel.from_fe(model, system, region)
+        return ContactModel.from_fe(model, system, self.region)
 
     def solve(self, log10_Pa, depths_mm) -> list:
         """[fem.contact.ContactResult per depth] of a new factorisation of these moduli, indented
