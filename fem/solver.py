@@ -430,7 +430,8 @@ class Model:
 
     @cached_property
     def _node_pairs(self) -> tuple:
-        """The pattern of K_dev, which depends on the mesh only: (pos (M, nb^2) index of each
+        """The pattern of K_dev, which depends on the mesh only (read-only arrays, int32 below 2^31
+        non-zeros): (pos (M, nb^2) index of each
         element's node pairs (a, b) among the sorted distinct pairs, item (dim, npairs) where the
         dim entries of row i of pair p's block start in K_dev's CSR data, divided by dim, indptr,
         indices) - row a * dim + i of the CSR holds, for every neighbour b of node a in increasing
@@ -445,10 +446,13 @@ class Model:
         nnz = d * d * len(pairs)
         index = np.int32 if nnz < 2 ** 31 else np.int64
         indptr = np.append((d * d * start[:-1, None] + d * np.arange(d) * deg[:, None]).ravel(), nnz)
-        block_col = np.empty(d * len(pairs), np.int64)
+        block_col = np.empty(d * len(pairs), index)
         block_col[item] = col
-        indices = (d * block_col[:, None] + np.arange(d)).ravel()
-        return pos.reshape(M, -1), item, indptr.astype(index), indices.astype(index)
+        indices = (d * block_col[:, None] + np.arange(d, dtype=index)).ravel()
+        out = pos.reshape(M, -1).astype(index), item.astype(index), indptr.astype(index), indices
+        for a in out:
+            a.flags.writeable = False       # shared by every K_dev of this mesh (`with_material`)
+        return out
 
     @cached_property
     def K_dev(self) -> sp.csr_matrix:
@@ -480,7 +484,7 @@ class Model:
         csr = np.empty((d * npairs, d))
         for i in range(d):
             csr[item[i]] = data[i * d:(i + 1) * d].T
-        K = sp.csr_matrix((csr.ravel(), indices.copy(), indptr.copy()), shape=(self.ndof, self.ndof))
+        K = sp.csr_matrix((csr.ravel(), indices, indptr), shape=(self.ndof, self.ndof), copy=False)
         K.has_sorted_indices = True
         return K
 
