@@ -17,8 +17,9 @@ peak resident set (getrusage). Appended to benchmarks/results/pardiso_options.md
 
 Settings (SETTINGS below): the project's (METIS nested dissection, Schur complement), no Schur
 complement, parallel METIS and minimum degree orderings (analysis only), two-level
-factorisation, and out of core (iparm[59] = 2) with and without the Schur complement, with
-MKL_PARDISO_OOC_MAX_CORE_SIZE = --ooc-core-mb in core. Out-of-core files go to the working
+factorisation, out of core (iparm[59] = 2) with and without the Schur complement, with
+MKL_PARDISO_OOC_MAX_CORE_SIZE = --ooc-core-mb in core, MKL's reordering optimisations, 1x1
+pivots, partial solves instead of the Schur complement, and the matrix in random input orders. Out-of-core files go to the working
 directory of the setting's process (--work) and are removed by PARDISO.
 """
 from __future__ import annotations
@@ -43,15 +44,30 @@ sys.path.insert(0, str(ROOT))
 import fem.linalg as linalg  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results" / "pardiso_options.md"
-SETTINGS = {     # name -> (iparm changes, Schur complement kept, factorise)
-    "default": ({}, True, True),
-    "no-schur": ({}, False, True),
-    "parallel-metis": ({1: 3}, True, False),
-    "min-degree-no-schur": ({1: 0}, False, False),
-    "two-level": ({23: 1}, True, True),
-    "ooc-no-schur": ({59: 2}, False, True),
-    "ooc": ({59: 2}, True, True),
+SETTINGS = {     # name -> (iparm changes, condensed rows: "schur" | "partial" | None, factorise, input order seed)
+    "default": ({}, "schur", True, None),
+    "no-schur": ({}, None, True, None),
+    "parallel-metis": ({1: 3}, "schur", False, None),
+    "min-degree-no-schur": ({1: 0}, None, False, None),
+    "two-level": ({23: 1}, "schur", True, None),
+    "ooc-no-schur": ({59: 2}, None, True, None),
+    "ooc": ({59: 2}, "schur", True, None),
+    "aggressive-5": ({1: 52}, "schur", True, None),
+    "1x1-pivots": ({20: 0}, "schur", True, None),
+    "partial-solve": ({}, "partial", False, None),
+    "random-input-order-0": ({}, "schur", False, 0),
+    "random-input-order-1": ({}, "schur", False, 1),
+    "random-input-order-2": ({}, "schur", False, 2),
+    "refactorise": ({}, "schur", True, None),
 }
+"""aggressive-5: iparm[1] = 52, MKL 2026's reordering optimisations (level 5 of 0-10).
+partial-solve: no Schur complement; the condensed rows marked for partial solves (iparm[30] = 1,
+the compliance from sparse right-hand sides), which orders them last as the Schur complement does.
+random-input-order-k: the matrix symmetrically permuted at random (seed k) before PARDISO's METIS,
+whose nested dissection depends on the input order.
+refactorise: the project's settings, then the same matrix factorised again on the same handle
+(phase 22 without a new analysis, as a loop over materials could): its time, and how far its
+Schur complement's Cholesky factor lies from the first factorisation's."""
 
 
 class _Captured(Exception):
@@ -88,8 +104,9 @@ class _Timed(linalg.Pardiso):
     timed (`times`); phase 12 (analysis and factorisation) runs as 11 then 22, so that both are
     timed. analysis_only: stop before the factorisation."""
 
-    def __init__(self, upper, schur, changes: dict, analysis_only: bool):
+    def __init__(self, upper, schur, changes: dict, analysis_only: bool, partial=None):
         self.changes, self.analysis_only, self.times = changes, analysis_only, {}
+        self.partial = partial
         try:
             super().__init__(upper, schur)
         except _AnalysisDone:
@@ -103,6 +120,10 @@ class _Timed(linalg.Pardiso):
         if phase == 11:
             for k, v in self.changes.items():
                 self.iparm[k] = v
+            if self.partial is not None:            # rows of the sparse right-hand sides
+                self.iparm[30] = 1
+                self._perm = np.zeros(self.n, dtype=np.int32)
+                self._perm[self.partial] = 1
             self.iparm[18] = -1                     # report the factorisation's MFlop
         elif phase == 22 and self.analysis_only:
             raise _AnalysisDone
@@ -113,14 +134,31 @@ class _Timed(linalg.Pardiso):
 
 def run_setting(work: Path, name: str) -> dict:
     """One setting in this process; returns its measurements."""
-    changes, keep_schur, factorise = SETTINGS[name]
-    upper = sp.load_npz(work / "upper.npz")
-    schur = np.load(work / "schur.npy") if keep_schur else None
-    solver = _Timed(upper, schur, changes, analysis_only=not factorise)
+    changes, condensed, factorise, seed = SETTINGS[name]
+    upper, rows = sp.load_npz(work / "upper.npz"), np.load(work / "schur.npy")
+    if seed is not None:
+        order = np.random.default_rng(seed).permutation(upper.shape[0])
+        full = (upper + sp.triu(upper, 1).T).tocsr()
+        upper = sp.triu(full[order][:, order], format="csr")
+        rank = np.empty_like(order)
+        rank[order] = np.arange(len(order))
+        rows = np.sort(rank[rows])
+    solver = _Timed(upper, rows if condensed == "schur" else None, changes, analysis_only=not factorise,
+                    partial=rows if condensed == "partial" else None)
     out = {"setting": name, "analysis_s": solver.times[11], "factorisation_s": solver.times.get(22, float("nan")),
            "nnz_L_M": solver.iparm[17] / 1e6, "gflop": solver.iparm[18] / 1e3,
            "pardiso_factor_MB": solver.iparm[16] / 1024 if factorise else float("nan"),
            "process_peak_MB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+    if name == "refactorise":
+        first = np.tril(solver._schur_factor[0])
+        S = np.zeros((len(rows), len(rows)), order="F")
+        t = time.perf_counter()
+        solver._phase(22, np.zeros(1), S, 1)
+        out["factorisation_s"] = time.perf_counter() - t
+        again = np.tril(linalg.sla.cho_factor(S, lower=True)[0])
+        out["note"] = (f"refactorisation on the same handle: Schur complement's Cholesky factor differs from "
+                       f"the first factorisation's by {np.abs(again - first).max() / np.abs(first).max():.1e} "
+                       f"(max, relative)")
     solver.release()
     return out
 
@@ -152,6 +190,7 @@ def main(argv=None):
              "|---|---:|---:|---:|---:|---:|---:|"]
     print("\n".join(lines), flush=True)
     env = {**os.environ, "MKL_PARDISO_OOC_MAX_CORE_SIZE": str(args.ooc_core_mb)}
+    notes = []
     for name in args.options:
         done = subprocess.run([sys.executable, __file__, args.model_dir, "--work", str(work), "--one", name],
                               capture_output=True, text=True, env=env, cwd=work)
@@ -161,7 +200,10 @@ def main(argv=None):
             r = json.loads(done.stdout.strip().splitlines()[-1])
             lines.append(f"| {name} | {r['analysis_s']:.2f} | {r['factorisation_s']:.2f} | {r['nnz_L_M']:.0f} "
                          f"| {r['gflop']:.0f} | {r['pardiso_factor_MB']:.0f} | {r['process_peak_MB']:.0f} |")
+            notes.extend([f"- {name}: {r['note']}."] if "note" in r else [])
         print(lines[-1], flush=True)
+    lines.extend([""] + notes if notes else [])
+    print("\n".join(notes), flush=True)
     if not args.no_write:
         with open(RESULTS, "a") as f:
             f.write("\n".join(lines) + "\n\n")
