@@ -74,6 +74,22 @@ def test_saddle_factor_and_refined_solve_match_dense():
     np.testing.assert_allclose(solve_refined(A, rhs), np.linalg.solve(A.toarray(), rhs), rtol=1e-10)
 
 
+def test_saddle_factor_on_free_rows_solves_the_restricted_system():
+    """SaddleFactor(free=) solves K restricted to the free rows and columns, with the compliance
+    block of those, and its residual check multiplies by the whole matrices correctly."""
+    pytest.importorskip("pypardiso")
+    K, B, D, _ = _saddle(seed=6)
+    free = np.setdiff1d(np.arange(K.shape[0]), [0, 5, 17])
+    Kc = (K + B.T @ sp.diags(1 / D) @ B).toarray()[np.ix_(free, free)]
+    rows = np.array([2, 9, 30])
+    factor = SaddleFactor(K, B, D, condensed=rows, free=free)
+    b = np.random.default_rng(7).standard_normal((len(free), 2))
+    np.testing.assert_allclose(factor(b), np.linalg.solve(Kc, b), rtol=1e-10)
+    assert factor.last_residual < 1e-12 and factor.residual(np.linalg.solve(Kc, b), b) < 1e-12
+    inv = np.linalg.inv(Kc)[np.ix_(rows, rows)]
+    np.testing.assert_allclose(factor.compliance_block(), inv, rtol=0, atol=1e-10 * np.abs(inv).max())
+
+
 @pytest.mark.parametrize("direction", [(0.0, -1.0, 0.0), (0.6, -0.8, 0.0)])
 def test_model_compliance_is_the_dense_inverse_block(direction):
     """Model.system(condense=) on a small box: the stored compliance along an axis and along a
