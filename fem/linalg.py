@@ -292,9 +292,10 @@ def drop_round_off(upper: sp.csr_matrix, rtol: float = ROUND_OFF) -> sp.csr_matr
     on the human 0.5 mm first run (13.8 M entries, 22,500 of them below 1e-14 of the diagonal
     scale and none between 1e-14 and 1e-12), patterns differing only in such entries gave
     factorisations of 1,077 to 1,374 GFlop; without them, 1,059. The pattern, and so the ordering
-    and the factorisation's cost, then depend only on the mesh and the constraints. The matrix
-    changes by at most rtol of its diagonal scale; residuals are still checked against the
-    exact matrix."""
+    and the factorisation's cost, then no longer depend on the order of summation (they still
+    depend on which layers share a modulus: a sum over two layers' elements cancels only when
+    their moduli are equal). The matrix changes by at most rtol of its diagonal scale; residuals
+    are still checked against the exact matrix."""
     upper = upper.tocsr(copy=True)
     d = np.sqrt(np.abs(upper.diagonal()))
     rows = np.repeat(np.arange(upper.shape[0], dtype=upper.indices.dtype), np.diff(upper.indptr))

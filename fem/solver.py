@@ -161,10 +161,8 @@ class Model:
         if self.layer.shape != (len(cells),):
             raise InputError(f"'layer' has {self.layer.size} values for {len(cells)} cells; "
                              "give one layer id per cell")
-        self.material = material if isinstance(material, Material) else Material(material, nu, rigid_bone=rigid_bone)
-        self.mu, self.lam = self.material.lame(self.layer)
+        self._set_material(material, nu, rigid_bone)
         self.regions = {name: self._flags(name, v) for name, v in (regions or {}).items()}
-        self._factors: dict = {}
 
     # ------------------------------------------------------------------ construction
     @classmethod
@@ -199,14 +197,19 @@ class Model:
         """This mesh and its regions with another material (arguments as the constructor's).
         Whatever of `GEOMETRY` this model has computed is shared, not rebuilt: a loop over
         materials (fits, layer studies) pays for the bases, the divergence matrix and K_dev's
-        pattern once (1.5 s a material on the human 0.5 mm model)."""
+        pattern once (about 1.6 s a material on the human 0.5 mm model: B 0.4 s, the scalar basis
+        0.2 s, the pattern 1 s)."""
         new = object.__new__(type(self))
         new.dim, new.mesh, new.layer, new.regions = self.dim, self.mesh, self.layer, dict(self.regions)
-        new.material = material if isinstance(material, Material) else Material(material, nu, rigid_bone=rigid_bone)
-        new.mu, new.lam = new.material.lame(new.layer)
-        new._factors = {}
+        new._set_material(material, nu, rigid_bone)
         new.__dict__.update({k: self.__dict__[k] for k in self.GEOMETRY if k in self.__dict__})
         return new
+
+    def _set_material(self, material, nu, rigid_bone) -> None:
+        """The material, its Lame parameters per element, and no factorisation yet."""
+        self.material = material if isinstance(material, Material) else Material(material, nu, rigid_bone=rigid_bone)
+        self.mu, self.lam = self.material.lame(self.layer)
+        self._factors: dict = {}
 
     @staticmethod
     def _oriented(p, cells):
@@ -430,12 +433,11 @@ class Model:
 
     @cached_property
     def _node_pairs(self) -> tuple:
-        """The pattern of K_dev, which depends on the mesh only (read-only arrays, int32 below 2^31
-        non-zeros): (pos (M, nb^2) index of each
+        """The pattern of K_dev, which depends on the mesh only: (pos (M, nb^2) index of each
         element's node pairs (a, b) among the sorted distinct pairs, item (dim, npairs) where the
         dim entries of row i of pair p's block start in K_dev's CSR data, divided by dim, indptr,
-        indices) - row a * dim + i of the CSR holds, for every neighbour b of node a in increasing
-        order, the columns b * dim + j."""
+        indices). Row a * dim + i of the CSR holds, for every neighbour b of node a in increasing
+        order, the columns b * dim + j. Read-only arrays, int32 below 2^31 non-zeros."""
         d, nn, M = self.dim, self.nnodes, self.mesh.nelements
         nodes = self.element_nodes.T                                             # (M, nb)
         pairs, pos = np.unique((nodes[:, :, None] * nn + nodes[:, None, :]).reshape(M, -1), return_inverse=True)
