@@ -18,7 +18,7 @@ import sys
 import traceback
 from pathlib import Path
 
-from common.errors import InputError
+from fingertip.errors import InputError
 
 HERE = Path(__file__).resolve().parent
 
@@ -75,13 +75,13 @@ def _add_reconstruct(sub):
 
 
 def _check_reconstruct(args):
-    from common.staging import check_output_dir
+    from fingertip.staging import check_output_dir
 
     check_output_dir(args.out)
 
 
 def _run_reconstruct(args):
-    from commands.reconstruct import run_reconstruct
+    from fingertip.jobs.reconstruct import run_reconstruct
 
     text = run_reconstruct(args.images, args.out, spacing_mm=args.spacing_mm, tol_mm=args.tol_mm,
                            tip_fraction=args.tip_fraction, force=args.force, progress=not args.quiet)
@@ -91,7 +91,7 @@ def _run_reconstruct(args):
 
 # --------------------------------------------------------------------------- render
 def _add_render(sub):
-    from fem.presets import SHAPES
+    from fem.geometry.presets import SHAPES
 
     p = sub.add_parser("render", help="render a synthetic turntable set of a known shape (+ ground truth)")
     p.add_argument("shape", choices=sorted(SHAPES), help="shape to render")
@@ -124,7 +124,7 @@ def _add_render(sub):
 
 
 def _run_render(args):
-    from commands.render import run_render
+    from fingertip.jobs.render import run_render
 
     text = run_render(args.shape, args.out, views=args.views, span_deg=args.span_deg, size_px=args.size,
                       mm_per_px=args.mm_per_px, aspect=args.aspect, blur_px=args.blur_px, noise=args.noise,
@@ -192,8 +192,8 @@ def _add_mesh(sub):
 
 
 def _mesh_options(args) -> dict:
-    """The options of `commands.mesh.check_options` from the parsed mesh arguments."""
-    from commands.mesh import ModelOptions
+    """The options of `fingertip.jobs.mesh.check_options` from the parsed mesh arguments."""
+    from fingertip.jobs.mesh import ModelOptions
 
     options = ModelOptions(epidermis_mm=args.epidermis, dermis_mm=args.dermis, layer3_mm=args.layer3,
                            layer3_scale=args.layer3_scale, bone_diameter_mm=args.bone_diameter,
@@ -206,13 +206,13 @@ def _mesh_options(args) -> dict:
 
 
 def _check_mesh(args):
-    from commands.mesh import check_options
+    from fingertip.jobs.mesh import check_options
 
     check_options(**_mesh_options(args))
 
 
 def _run_mesh(args):
-    from commands.mesh import run_mesh
+    from fingertip.jobs.mesh import run_mesh
 
     text = run_mesh(**_mesh_options(args), z_range_mm=args.z_range, tip_width_frac=args.tip_width_frac,
                     force=args.force, progress=not args.quiet)
@@ -266,7 +266,7 @@ def _add_indent(sub):
 
 
 def _indent_options(args) -> dict:
-    """The options of `commands.indent.indent_scene` from the parsed indent arguments."""
+    """The options of `fingertip.jobs.indent.indent_scene` from the parsed indent arguments."""
     return dict(model=args.model, scene=args.scene, indentor=args.indentor, orientation=args.orientation,
                 position=args.position, incline=args.incline, depth=args.depth, force=args.force,
                 equal_force=args.equal_force, max_depth=args.max_depth, sweep=args.sweep,
@@ -276,13 +276,13 @@ def _indent_options(args) -> dict:
 
 
 def _check_indent(args):
-    from commands.indent import indent_scene
+    from fingertip.jobs.indent import indent_scene
 
     indent_scene(**_indent_options(args))
 
 
 def _run_indent(args):
-    from commands.indent import run_indent
+    from fingertip.jobs.indent import run_indent
 
     text = run_indent(**_indent_options(args), progress=not args.quiet, scheduler=args.scheduler)
     if not args.quiet:
@@ -300,7 +300,7 @@ def _add_prepare(sub):
 
 
 def _run_prepare(args):
-    from commands.prepare import prepare_folder
+    from fingertip.jobs.prepare import prepare_folder
 
     text = prepare_folder(args.model, material=args.material, nu=args.nu, approach=args.approach,
                           receptor_depths=args.receptor_depths, receptor_spacing=args.receptor_spacing,
@@ -339,7 +339,7 @@ def _add_study_layers(sub):
 
 
 def _run_study_layers(args):
-    from commands.biomech import run_study_layers
+    from fingertip.jobs.biomech import run_study_layers
 
     text = run_study_layers(args.model, args.out or str(Path(args.model) / "study_layers"), base=args.base,
                             layers=args.layers, offsets=args.offsets, depths=args.depth, indentor=args.indentor,
@@ -373,7 +373,7 @@ def _add_fit_material(sub):
 
 
 def _run_fit_material(args):
-    from commands.biomech import run_fit_material
+    from fingertip.jobs.biomech import run_fit_material
 
     text = run_fit_material(args.model, args.out or str(Path(args.model) / "fit_material"),
                             deflection_csv=args.deflection, force_csv=args.force, keep_ratios=args.keep_ratios,
@@ -409,7 +409,7 @@ def _add_line_load(sub):
 
 
 def _run_line_load(args):
-    from commands.biomech import run_line_load
+    from fingertip.jobs.biomech import run_line_load
 
     text = run_line_load(args.model, args.out or str(Path(args.model) / "line_load"), depths=args.depth,
                          material=args.material, nu=args.nu, large_deformation=args.large_deformation,
@@ -438,7 +438,7 @@ def _add_contact_series(sub):
 
 
 def _run_contact_series(args):
-    from commands.biomech import run_contact_series
+    from fingertip.jobs.biomech import run_contact_series
 
     text = run_contact_series(args.model, args.out or str(Path(args.model) / "contact_series"),
                               material=args.material, cylinders=args.cylinders, forces=args.force,
@@ -457,7 +457,7 @@ def _add_analyze(sub):
     p.add_argument("--neural", required=True, help="neural CSV: stimulus,position_mm,rate_ips[,unit,orientation]")
     p.add_argument("--diameters", type=POSITIVE, nargs=2, metavar=("D1", "D2"),
                    help="model diameters of the two runs in mm (default: from each run's ../model.json)")
-    p.add_argument("--measures", help="comma-separated candidates: fem.measures names or abs:<name> "
+    p.add_argument("--measures", help="comma-separated candidates: fem.core.measures names or abs:<name> "
                                       "(default: the thesis candidates the runs computed)")
     p.add_argument("--fit-on", help="comma-separated stimuli to fit on; the others are predicted with "
                                     "the same a, b, depth (default: fit all together)")
@@ -470,7 +470,7 @@ def _add_analyze(sub):
 
 
 def _run_analyze(args):
-    from commands.analyze import run_analyze
+    from fingertip.jobs.analyze import run_analyze
 
     text = run_analyze(args.results, args.neural, out_dir=args.out, diameters_mm=args.diameters,
                        measures=args.measures, fit_on=args.fit_on, orientation=args.orientation,
@@ -493,7 +493,7 @@ def _add_run(sub):
 
 
 def _run_run(args):
-    from commands.reconstruct import chain_steps
+    from fingertip.jobs.reconstruct import chain_steps
 
     parser = build_parser()
     steps = chain_steps(args.images, args.out, args.size, args.scene, force=args.force, quiet=args.quiet)
@@ -528,7 +528,7 @@ def _add_batch(sub):
 
 
 def _batch_options(args) -> dict:
-    from commands.batch import MeshOptions, parse_subjects
+    from fingertip.jobs.batch import MeshOptions, parse_subjects
 
     return dict(subjects=parse_subjects(args.subjects), scene_path=args.scene, out_dir=args.out,
                 mesh=MeshOptions(size_mm=args.size, coarse_mm=args.coarse, growth=args.growth,
@@ -536,13 +536,13 @@ def _batch_options(args) -> dict:
 
 
 def _check_batch(args):
-    from commands.batch import check_batch
+    from fingertip.jobs.batch import check_batch
 
     check_batch(**_batch_options(args))
 
 
 def _run_batch(args):
-    from commands.batch import run_batch
+    from fingertip.jobs.batch import run_batch
 
     text = run_batch(**_batch_options(args), force=args.force, progress=not args.quiet)
     if not args.quiet:
@@ -562,7 +562,7 @@ def _add_reproduce(sub):
 
 
 def _run_reproduce(args):
-    from commands.reproduce import run_reproduce
+    from fingertip.jobs.reproduce import run_reproduce
 
     text = run_reproduce(args.out, quick=args.quick, progress=not args.quiet)
     if not args.quiet:

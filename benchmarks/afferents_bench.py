@@ -25,11 +25,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from fem.afferents import respond, sampler_of, scene_responses
-from fem.experiments import run_experiments
-from fem.findings import Workshop
-from fem.modelfolder import read_model
-from fem.scene import load_scene
+from fem.receptors.afferents import respond, sampler_of, scene_responses
+from fem.experiments.runner import run_experiments
+from fem.thesis.findings import Workshop
+from fem.io.modelfolder import read_model
+from fem.experiments.scene import load_scene
 
 SCENE = Path(__file__).resolve().parents[1] / "scenes" / "ramp_hold.toml"
 

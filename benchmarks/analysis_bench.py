@@ -30,11 +30,11 @@ from matplotlib.figure import Figure  # noqa: E402
 
 import pipeline  # noqa: E402
 from fem.plots import save  # noqa: E402
-from fem.probes import (Probe2D, gap_analysis, point_load_field, receptive_field, settling_separation,  # noqa: E402
+from fem.receptors.probes import (Probe2D, gap_analysis, point_load_field, receptive_field, settling_separation,  # noqa: E402
                         two_point_curves)
-from fem.runfolder import IndentRun  # noqa: E402
-from fem.dynamics import LumpedReceptor, measure_time_course, ramp_and_hold  # noqa: E402
-from fem.indentors import make_indentor  # noqa: E402
+from fem.io.runfolder import IndentRun  # noqa: E402
+from fem.receptors.dynamics import LumpedReceptor, measure_time_course, ramp_and_hold  # noqa: E402
+from fem.contact.indentors import make_indentor  # noqa: E402
 
 RESULTS = HERE / "results"
 

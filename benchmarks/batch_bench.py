@@ -6,7 +6,7 @@ projection of 100 subjects on 1, 10 and 100 workers from the measured task times
     python benchmarks/batch_bench.py --with-3d          # also one coarse 3D subject (monkey, size 1.5)
     python benchmarks/batch_bench.py --out benchmarks/results/batch_bench.md
 
-Each subject is one task (commands.batch.run_subject): a few hundred bytes of paths and options go
+Each subject is one task (fingertip.jobs.batch.run_subject): a few hundred bytes of paths and options go
 to the worker, which reads and writes the subject's folder under the shared output folder.
 """
 from __future__ import annotations
@@ -25,9 +25,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from commands.batch import MeshOptions, parse_subjects, run_subject, summary_table
-from common.distribute import Scheduler, TaskRunner
-from common.tables import csv_text
+from fingertip.jobs.batch import MeshOptions, parse_subjects, run_subject, summary_table
+from fingertip.distribute import Scheduler, TaskRunner
+from fingertip.tables import csv_text
 
 SCENE = """\
 [receptors]

@@ -37,9 +37,9 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 import pipeline  # noqa: E402
-from fem.biomech import DeflectionExperiment, Profile, cylinder_series, layer_study  # noqa: E402
-from fem.biomech_fit import fit_material  # noqa: E402
-from fem.nonlinear import compare_line_load  # noqa: E402
+from fem.biomech.deflection import DeflectionExperiment, Profile, cylinder_series, layer_study  # noqa: E402
+from fem.biomech.fit import fit_material  # noqa: E402
+from fem.biomech.line_load import compare_line_load  # noqa: E402
 
 
 def cpu():
@@ -214,8 +214,8 @@ def main():
 
 
 def _comparison(name, folder, c, slip):
-    """JSON row of a fem.nonlinear.LineLoadComparison."""
-    from fem.solver import Model
+    """JSON row of a fem.biomech.line_load.LineLoadComparison."""
+    from fem.core.model import Model
 
     return {"model": name, "dofs": int(Model.from_mesh(folder / "mesh.vtu").ndof), "slip": slip,
             "depths_mm": c.depths_mm.tolist(), "force_ratio": (c.force_nonlinear_N / c.force_linear_N).tolist(),

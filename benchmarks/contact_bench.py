@@ -29,10 +29,10 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from fem.contact import MAX_DEPTH_MM, ContactModel, reach  # noqa: E402
-from fem.modelfolder import CONTACT_REGION, factorise, read_model, receptor_surface  # noqa: E402
-from fem.indentors import make_indentor  # noqa: E402
-from fem.receptors import ReceptorSampler, receptor_grid  # noqa: E402
+from fem.contact.linear import MAX_DEPTH_MM, ContactModel, reach  # noqa: E402
+from fem.io.modelfolder import CONTACT_REGION, factorise, read_model, receptor_surface  # noqa: E402
+from fem.contact.indentors import make_indentor  # noqa: E402
+from fem.receptors.grid import ReceptorSampler, receptor_grid  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results" / "contact_bench.md"
 
@@ -41,7 +41,7 @@ def _setup(model_dir, middle_line=False, plan=None):
     """Model, factorisation, receptors (3 depths; along the section through the middle of the pad
     when middle_line) and the contact model; returns them with the setup time in s. plan:
     optional (indentor, offsets (k, 3) mm, deepest depth mm): as in `pipeline.py indent`, only the
-    candidates the indentor (moved by `_middle`) can reach are condensed (fem.contact.reach)."""
+    candidates the indentor (moved by `_middle`) can reach are condensed (fem.contact.linear.reach)."""
     t = time.perf_counter()
     model, info = read_model(model_dir)
     region = CONTACT_REGION[model.dim]
@@ -130,7 +130,7 @@ def case_c5(args):
 def case_dorsal(args):
     """Thesis 6.2.1 trend: under a 2 mm line load (wedge perpendicular to the axis, middle of the
     pad) the dorsal half moves vertically less than 10 % of the largest vertical displacement; the
-    proximal cut's core is held (fem.modelfolder.HELD). Dorsal half: the nodes of the outer surface
+    proximal cut's core is held (fem.io.modelfolder.HELD). Dorsal half: the nodes of the outer surface
     below the section centroid, the reference of the model's volar half and nail span, on the
     surface the thesis draws its contours (figures 6-5, 6-7); the centroid's y(z) is a
     volume-weighted quadratic fit of the tets' y against z (within 0.01 mm of the presets' section
@@ -166,8 +166,8 @@ def case_dorsal(args):
 
 def case_hertz(args):
     """Rigid sphere R = 5 mm on a quarter block 40 x 40 x 40 mm (graded P2 tets), E = 1 MPa."""
-    from fem.reference import box, fine_then_growing, hertz_sphere
-    from fem.solver import Model
+    from fem.verify.closed_forms import box, fine_then_growing, hertz_sphere
+    from fem.core.model import Model
 
     rows = []
     for nu in (0.3, 0.49):

@@ -1,8 +1,8 @@
 #!/usr/bin/env python
 """Does large deformation explain the monkey's dorsal ratio above 10 %? Linear against neo-Hookean
 under the same load: the volar vertices within 0.25 mm of the middle section and within
---half-length mm of the midline pushed down by --depth mm, held sideways (fem.nonlinear's line
-load), the model folder held as fem.modelfolder.open_model holds it, m43338, nu 0.48.
+--half-length mm of the midline pushed down by --depth mm, held sideways (fem.core.neohookean's line
+load), the model folder held as fem.io.modelfolder.open_model holds it, m43338, nu 0.48.
 
     python benchmarks/dorsal_large_deformation.py out/monkey08 [--half-length 3] [--depth 1.6]
 
@@ -22,8 +22,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from fem.modelfolder import held_regions  # noqa: E402
-from fem.nonlinear import NeoHookean, line_load_model  # noqa: E402
+from fem.io.modelfolder import held_regions  # noqa: E402
+from fem.biomech.line_load import line_load_model  # noqa: E402
+from fem.core.neohookean import NeoHookean  # noqa: E402
 
 
 def main():

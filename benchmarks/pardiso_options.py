@@ -10,7 +10,7 @@ factorisation, and the upper triangle of the saddle matrix it hands to PARDISO a
 rows (the reachable contact candidates) are saved in --work. Then every setting runs in its own
 process (so that its peak memory is its own): PARDISO analysis (phase 11) and, unless the
 setting says analysis only, factorisation (phase 22, with the Schur complement when the setting
-keeps it), with the project's iparm (`fem.linalg.Pardiso`) plus the setting's changes. Printed
+keeps it), with the project's iparm (`fem.core.linalg.Pardiso`) plus the setting's changes. Printed
 per setting: analysis and factorisation wall time, nnz(L) (iparm[17]), factorisation GFlop
 (iparm[18]), PARDISO's own peak memory for the factorisation (iparm[16]) and the process's
 peak resident set (getrusage). Appended to benchmarks/results/pardiso_options.md.
@@ -42,7 +42,7 @@ import scipy.sparse as sp
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-import fem.linalg as linalg  # noqa: E402
+import fem.core.linalg as linalg  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results" / "pardiso_options.md"
 SETTINGS = {     # name -> (iparm changes, condensed rows: "schur" | "partial" | None, factorise, input order seed)
@@ -78,7 +78,7 @@ class _Captured(Exception):
 def capture(model_dir: str, work: Path, indentor: str, orientation: str, depth: str) -> None:
     """Save the saddle matrix's upper triangle (upper.npz) and condensed rows (schur.npy) that the
     `indent` back end factorises for this scene."""
-    from commands.indent import indent_folder, scene_of_flags
+    from fingertip.jobs.indent import indent_folder, scene_of_flags
 
     class Capture(linalg.Pardiso):
         def __init__(self, upper, schur=None, mkl_defaults=False):

@@ -48,11 +48,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 import pipeline  # noqa: E402
-from commands.indent import indent_folder, scene_of_flags  # noqa: E402
-from commands.prepare import prepare_folder  # noqa: E402
-from fem.experiments import placement  # noqa: E402
-from fem.indentors import make_indentor  # noqa: E402
-from fem.modelfolder import CONTACT_REGION, held_regions, read_model  # noqa: E402
+from fingertip.jobs.indent import indent_folder, scene_of_flags  # noqa: E402
+from fingertip.jobs.prepare import prepare_folder  # noqa: E402
+from fem.experiments.runner import placement  # noqa: E402
+from fem.contact.indentors import make_indentor  # noqa: E402
+from fem.io.modelfolder import CONTACT_REGION, held_regions, read_model  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results" / "peer_bench.md"
 CLI_RUNS = 3
@@ -84,7 +84,7 @@ def peer_indent(model_dir, scene, max_iterations: int = 50) -> dict:
     mu, lam = model.material.lame(model.layer)                          # per element, MPa
     nqp = basis.X.shape[1]
     K = asm(elasticity, basis, mu=np.repeat(mu[:, None], nqp, 1), lam=np.repeat(lam[:, None], nqp, 1)).tocsr()
-    fixed, _ = model._constraints(held_regions(model))                  # all held values are 0
+    fixed, _ = model.discretisation.constraints(held_regions(model), model.material.rigid)   # all held values are 0
 
     exp = scene.experiments[0]
     sn = model.surface_nodes(CONTACT_REGION[dim])
@@ -175,7 +175,7 @@ def _warm_up() -> None:
     import pypardiso  # noqa: F401
     import skfem  # noqa: F401
 
-    from fem.linalg import _thread_controller
+    from fem.core.linalg import _thread_controller
 
     _thread_controller()
 
@@ -225,7 +225,7 @@ def run_case(case: str, work: Path, size: float, rounds: int) -> list[str]:
     peer_t = best["peer"][0]
     diff = max(abs(p / f - 1) for p, f in zip(peer["force_N"], first))
     same = max(abs(b / f - 1) for b, f in zip(repeat, first))
-    from fem.modelfolder import read_model as _rm
+    from fem.io.modelfolder import read_model as _rm
     model, _ = _rm(model_dir)
     unit = "N/mm" if model.dim == 2 else "N"
     lines = [f"### {case.upper()}: {name} ({model.ndof} DOFs), {spec['indentor']} {spec['orientation']}, "

@@ -22,7 +22,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 
-from fem.presets import make_shape, shape_from_truth  # noqa: E402
+from fem.geometry.presets import make_shape, shape_from_truth  # noqa: E402
 from reconstruct.pipeline import reconstruct, sections_document  # noqa: E402
 from reconstruct.synthetic import compare_to_truth, load_truth, render_turntable  # noqa: E402
 from reconstruct.turntable import load_turntable  # noqa: E402

@@ -6,7 +6,7 @@
 
 Problem: octant of a thick sphere (a = 1, b = 2 mm), internal pressure 0.01 MPa, E = 0.01 MPa,
 symmetry planes on rollers; both faceted surfaces carry the exact Lame traction, so the errors are
-the solver's (fem.reference.radial_traction). Errors: max over P2 nodes of |u_r - exact| / max
+the solver's (fem.verify.closed_forms.radial_traction). Errors: max over P2 nodes of |u_r - exact| / max
 |u_r|, and max over elements of |mean stress - exact| / max |exact| (per layer when layered).
 Prints the tables and writes benchmarks/results/solver_bench.md.
 """
@@ -23,7 +23,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from fem import Model, reference as ref  # noqa: E402
+from fem import Model
+
+from fem.verify import closed_forms as ref  # noqa: E402
 
 A, B, C, P, E = 1.0, 2.0, 1.5, 0.01, 0.01
 SYMMETRY = {"sym_x": (0, None, None), "sym_y": (None, 0, None), "sym_z": (None, None, 0)}
@@ -34,7 +36,7 @@ def timed(make_model, prescribed):
     prescribed: a dict, or a callable model -> dict."""
     w0, c0 = time.perf_counter(), time.process_time()
     model = make_model()
-    model.K_dev, model._B, model.pressure_compliance                  # noqa: B018  (assemble)
+    model.K_dev, model.discretisation.B, model.pressure_compliance    # noqa: B018  (assemble)
     w1, c1 = time.perf_counter(), time.process_time()
     prescribed = prescribed(model) if callable(prescribed) else prescribed
     model.system(prescribed)
@@ -59,7 +61,7 @@ def resolve(model, system):
 
 
 def fingertip(path):
-    """Model.from_mesh on a mesh.vtu with nail/support/volar regions (held as fem.modelfolder.open_model
+    """Model.from_mesh on a mesh.vtu with nail/support/volar regions (held as fem.io.modelfolder.open_model
     holds them): 0.1 N spread over `volar`. Then the factorisation again with the volar nodes'
     vertical displacement condensed (what open_model does for contact), and the compliance inverse."""
     def held(model):
@@ -177,7 +179,7 @@ def main(argv=None):
                     ("refinement tolerance", "{refine_tol:.0e}"), ("residual", "{residual:.1e}")]) + """
 
 With the volar nodes' vertical displacement condensed (`Model.system(condense=)`, as
-`fem.modelfolder.open_model` factorises for contact): factorisation with the Schur complement, and
+`fem.io.modelfolder.open_model` factorises for contact): factorisation with the Schur complement, and
 the inverse of the Schur complement (the whole contact compliance).
 
 """ + table([row], [("condensed nodes", "{condensed}"), ("factorisation [s]", "{cond_factor_s:.1f}"),

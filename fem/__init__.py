@@ -2,12 +2,12 @@
 
 `from fem import Model, Material` loads the solver lazily, so `import fem` stays light.
 """
-from common.errors import InputError
+from fingertip.errors import InputError
 
 __all__ = ["InputError", "Model", "Material", "Solution", "LinearSystem", "MEASURES"]
 
-_LAZY = {"Model": "fem.solver", "Solution": "fem.fields", "LinearSystem": "fem.system",
-         "Material": "fem.materials", "MEASURES": "fem.measures"}
+_LAZY = {"Model": "fem.core.model", "Solution": "fem.core.fields", "LinearSystem": "fem.core.system",
+         "Material": "fem.core.materials", "MEASURES": "fem.core.measures"}
 
 
 def __getattr__(name):

@@ -8,8 +8,8 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
-from fem.analysis import model_values
-from fem.runfolder import pad3
+from fem.receptors.analysis import model_values
+from fem.io.runfolder import pad3
 
 
 def save(fig: Figure, path, dpi: int = 110) -> None:
@@ -113,8 +113,8 @@ def indent_pressure_figure(name: str, along_mm, across_mm, pressure_MPa, depth_m
 
 
 def indent_figures(run, scene_run, tables) -> dict[str, Figure]:
-    """{file name: Figure} of one experiment (fem.experiments.ExperimentRun of a SceneRun, with its
-    fem.runfolder.run_tables): <name>_force.png (two or more indentations), _profile.png,
+    """{file name: Figure} of one experiment (fem.experiments.runner.ExperimentRun of a SceneRun, with its
+    fem.io.runfolder.run_tables): <name>_force.png (two or more indentations), _profile.png,
     _receptors.png and (3D) _pressure.png."""
     figures = {}
     name, ind, steps, rows = run.name, run.indentor, run.steps, tables["steps"]
@@ -174,7 +174,7 @@ CLASS_COLOURS = {"SA1": "tab:green", "RA": "tab:blue", "PC": "tab:orange"}
 
 
 def afferent_figures(name: str, resp, depth_mm) -> dict[str, Figure]:
-    """{file name: Figure} of a traced experiment's afferents (fem.afferents.PopulationResponse):
+    """{file name: Figure} of a traced experiment's afferents (fem.receptors.afferents.PopulationResponse):
     <name>/raster.png (the course, the spikes of every afferent by class and position, and the
     population rate per class in 20 ms bins) and <name>/rate_map.png (mean rate of each afferent at
     its site on the pad, one panel per class). depth_mm (k,): depth reached at each sample time."""
@@ -228,7 +228,7 @@ def _plot_deflection(ax, distance_mm, deflection_mm, style="-", label=""):
 
 
 def _plot_measured(ax, data, label="data"):
-    """Measured profiles (fem.biomech.Profile) as crosses on every axes."""
+    """Measured profiles (fem.biomech.deflection.Profile) as crosses on every axes."""
     for p in data:
         pos = p.distance_mm > 0
         for a in ax:
@@ -238,7 +238,7 @@ def _plot_measured(ax, data, label="data"):
 
 
 def _plot_idealised(ax, fits, reach_mm):
-    """The waterbed and beam curves {kind: fem.biomech.FreeLengthFit} from 0 to reach_mm."""
+    """The waterbed and beam curves {kind: fem.biomech.deflection.FreeLengthFit} from 0 to reach_mm."""
     x = np.linspace(0, reach_mm, 400)
     for kind, f in fits.items():
         lab = f"{kind} L={f.length_mm:.3g} mm" + (" (at bound)" if f.at_bound else "")
@@ -253,7 +253,7 @@ def _legends(ax, data=()):
 
 
 def layer_study_figure(study, data=()) -> Figure:
-    """Thesis figure 6-10 from a fem.biomech.LayerStudy at its last depth: one row per varied layer,
+    """Thesis figure 6-10 from a fem.biomech.deflection.LayerStudy at its last depth: one row per varied layer,
     its codes' profiles (linear and log distance), the measured profiles of that depth, and a line
     where the layer matters most."""
     k = len(study.depths_mm) - 1
@@ -301,7 +301,7 @@ def deflection_fit_figure(data, fitted, start, base: str, fits) -> Figure:
 
 
 def force_scale_figure(scale) -> Figure:
-    """Measured forces and the scaled model forces of a fem.biomech_fit.ForceScale against depth."""
+    """Measured forces and the scaled model forces of a fem.biomech.fit.ForceScale against depth."""
     fig = Figure(figsize=(5, 4))
     a = fig.subplots()
     a.plot(scale.depths_mm, scale.measured_N, "kx", label="measured")
@@ -313,7 +313,7 @@ def force_scale_figure(scale) -> Figure:
 
 def cylinder_series_figure(s, dim: int) -> Figure:
     """Contact area (2D: width), peak pressure and depth (or force) against cylinder diameter, one
-    line per load, of a fem.biomech.CylinderSeries (thesis figs. 4-25, 5-14)."""
+    line per load, of a fem.biomech.deflection.CylinderSeries (thesis figs. 4-25, 5-14)."""
     force_unit = "N/mm" if dim == 2 else "N"
     fig = Figure(figsize=(14, 4))
     ax = fig.subplots(1, 3)
@@ -333,7 +333,7 @@ def cylinder_series_figure(s, dim: int) -> Figure:
 
 
 def line_load_figure(c, large_deformation: bool) -> Figure:
-    """Surface deflection per depth and force against depth of a fem.nonlinear.LineLoadComparison
+    """Surface deflection per depth and force against depth of a fem.biomech.line_load.LineLoadComparison
     (linear; with large_deformation also the neo-Hookean solve)."""
     fig = Figure(figsize=(12, 4))
     ax = fig.subplots(1, 2)
@@ -380,8 +380,8 @@ def cohort_figure(curves: dict, title: str = "") -> Figure:
 
 # --------------------------------------------------------------------------- receptor analysis
 def response_profiles_figure(runs, data, fits) -> Figure:
-    """Recorded rates (fem.neural.NeuralData of one unit) and the rates predicted by linear receptor
-    fits (fem.analysis.Fit) against stimulus position, one panel per stimulus; with one indentation
+    """Recorded rates (fem.receptors.neural.NeuralData of one unit) and the rates predicted by linear receptor
+    fits (fem.receptors.analysis.Fit) against stimulus position, one panel per stimulus; with one indentation
     per stimulus (e.g. cylinders at constant force, thesis figure 4-26) one panel over the stimuli."""
     stimuli = data.stimuli
     if all(len(set(data.position_mm[data.stimulus == s])) == 1 for s in stimuli):
@@ -415,7 +415,7 @@ def response_profiles_figure(runs, data, fits) -> Figure:
 
 
 def response_scatter_figure(runs, data, fits) -> Figure:
-    """Recorded rate against the candidate measure at the receptor, one panel per fem.analysis.Fit,
+    """Recorded rate against the candidate measure at the receptor, one panel per fem.receptors.analysis.Fit,
     with its line d = a S + b and a band of its RMS error."""
     fig = Figure(figsize=(3.6 * len(fits), 3.4))
     axes = fig.subplots(1, len(fits), squeeze=False)
@@ -445,7 +445,7 @@ def _readable_ticks(axis, nbins: int = 5) -> None:
 
 
 def finding_figure(finding) -> Figure:
-    """The curves of a `fem.findings.Finding`, titled with its thesis section and verdict."""
+    """The curves of a `fem.thesis.findings.Finding`, titled with its thesis section and verdict."""
     fig = Figure(figsize=(6.4, 4.2))
     ax = fig.add_subplot()
     for s in finding.series:

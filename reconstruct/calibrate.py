@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from common.errors import InputError
+from fingertip.errors import InputError
 from reconstruct.silhouette import Borders
 
 

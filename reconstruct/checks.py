@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import ConvexHull
 
-from common.errors import InputError
+from fingertip.errors import InputError
 
 TANGENT_TOL_PX = 0.3        # rms disagreement of a section's tangents above which it is refused
 FOLD_TOL_PX = 1.0           # depth of a fold of the outline (inside its own hull) that is refused

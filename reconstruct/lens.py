@@ -17,7 +17,7 @@ from dataclasses import dataclass, replace
 import cv2
 import numpy as np
 
-from common.errors import InputError
+from fingertip.errors import InputError
 from reconstruct.silhouette import Borders
 
 MIN_PHOTOS = 5               # fewest usable checkerboard photos

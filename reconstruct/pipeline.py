@@ -10,8 +10,8 @@ import numpy as np
 from tqdm import tqdm
 
 from reconstruct.calibrate import Frame, estimate_axis, sample_borders, template_scale
-from common.errors import InputError
-from common.staging import staged_output, write_json
+from fingertip.errors import InputError
+from fingertip.staging import staged_output, write_json
 from reconstruct.sections import (N_POINTS, choose_levels, convex_section, fit_support, harmonics_for,
                                   support_curve, support_samples, support_values, tangent_polygon)
 from reconstruct.camera import Camera, border_tables, perspective_fit, proximal_cut

@@ -16,7 +16,7 @@ import numpy as np
 from scipy.signal import savgol_filter
 from scipy.spatial import ConvexHull, HalfspaceIntersection
 
-from common.errors import InputError
+from fingertip.errors import InputError
 
 N_POINTS = 360            # points per output section (uniform in the normal angle)
 

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from common.errors import InputError
+from fingertip.errors import InputError
 
 MIN_CONTRAST = 40.0          # grey levels between background and object below which "no object"
 _POLY_DEGREE = 4             # illumination model: polynomial in x, y of this total degree

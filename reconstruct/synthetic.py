@@ -1,5 +1,5 @@
 """Turntable renderer (parallel projection or pinhole camera) of a solid with known sections
-(fem.presets shapes), for tests, benchmarks and sample_images/, and the comparison of reconstructed sections with that solid.
+(fem.geometry.presets shapes), for tests, benchmarks and sample_images/, and the comparison of reconstructed sections with that solid.
 
 The solid is any object with `name`, `params` (JSON-ready dict), `z_range_mm`, `rod_radius_mm`,
 `extent_table(z_mm, directions)` and, for the comparison, `convex_section(z_mm, n)` and
@@ -27,8 +27,8 @@ import cv2
 import numpy as np
 from tqdm import tqdm
 
-from common.errors import InputError
-from common.staging import staged_output, write_json
+from fingertip.errors import InputError
+from fingertip.staging import staged_output, write_json
 from reconstruct.lens import Lens
 
 BACKGROUND, OBJECT = 245.0, 25.0   # grey levels at full illumination

@@ -21,7 +21,7 @@ import cv2
 import numpy as np
 from PIL import Image
 
-from common.errors import InputError
+from fingertip.errors import InputError
 from reconstruct.lens import MIN_PHOTOS
 
 IMAGE_SUFFIXES = {".png", ".tif", ".tiff", ".jpg", ".jpeg", ".bmp"}

@@ -1,7 +1,7 @@
 """Fixtures shared by several test modules."""
 import pytest
 
-from fem.findings import Workshop
+from fem.thesis.findings import Workshop
 
 
 @pytest.fixture(scope="session")

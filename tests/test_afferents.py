@@ -1,4 +1,4 @@
-"""Spiking afferents driven by the finite-element finger (fem.traces, fem.afferents, fem.scene's
+"""Spiking afferents driven by the finite-element finger (fem.experiments.traces, fem.receptors.afferents, fem.experiments.scene's
 [afferents] and [experiment.trace]): the shipped ramp-and-hold scene end to end, and the
 behaviours every afferent paper shows, on the 1 mm monkey preset (the session Workshop)."""
 import csv
@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 import pipeline
-from common.errors import InputError
-from fem.afferents import Population, experiment_inputs, respond, sampler_of
-from fem.experiments import run_experiments
-from fem.modelfolder import read_model
-from fem.scene import Scene, load_scene
-from fem.traces import fractions
+from fingertip.errors import InputError
+from fem.receptors.afferents import Population, experiment_inputs, respond, sampler_of
+from fem.experiments.runner import run_experiments
+from fem.io.modelfolder import read_model
+from fem.experiments.scene import Scene, load_scene
+from fem.experiments.traces import fractions
 
 SCENE = Path(__file__).resolve().parents[1] / "scenes" / "ramp_hold.toml"
 

@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 
 import pipeline
-from fem.analysis import as_runs, fit_measure, goodness, linear_fit, model_values, rank_candidates, rank_per_stimulus
-from fem.measured import read_neural_csv, write_neural_csv
-from fem.neural import make_neural
-from fem.probes import (Probe2D, gap_analysis, point_load_field, receptive_field, settling_separation,
+from fem.receptors.analysis import as_runs, fit_measure, goodness, linear_fit, model_values, rank_candidates, rank_per_stimulus
+from fem.receptors.neural import read_neural_csv, write_neural_csv
+from fem.receptors.neural import make_neural
+from fem.receptors.probes import (Probe2D, gap_analysis, point_load_field, receptive_field, settling_separation,
                         two_point_curves)
-from fem.runfolder import IndentRun
-from common.errors import InputError
+from fem.io.runfolder import IndentRun
+from fingertip.errors import InputError
 
 SCENE = """[receptors]
 depths_mm = "0.5:1:0.125"
@@ -359,7 +359,7 @@ def test_settling_separation_definition():
 def test_units_fitted_separately_and_orientation_selected(run8):
     """Two units with different depths in one file: each gets its own parameters; rows of another
     orientation are left out with --orientation."""
-    from fem.analysis import analyze
+    from fem.receptors.analysis import analyze
 
     runs = {math.nan: run8}
     u1, a1 = synthetic(runs, depth=0.625, noise=0.5, seed=11)

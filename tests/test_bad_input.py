@@ -169,8 +169,8 @@ def _fake_tetrahedralize(model, sizing, threads=0, progress=None):
 
 
 def test_corrupt_cache_entry_is_rebuilt(tmp_path, monkeypatch):
-    from fem import mesh
-    from fem.model import model_from_args, params_for
+    from fem.geometry import mesh3d as mesh
+    from fem.geometry.layered import model_from_args, params_for
 
     monkeypatch.setenv("FINGERTIP_CACHE_DIR", str(tmp_path / "cache"))
     monkeypatch.setattr(mesh, "tetrahedralize", _fake_tetrahedralize)
@@ -193,7 +193,7 @@ def test_corrupt_cache_entry_is_rebuilt(tmp_path, monkeypatch):
 
 
 def test_cache_entry_of_wrong_arrays_is_refused(tmp_path):
-    from fem import mesh
+    from fem.geometry import mesh3d as mesh
 
     path = tmp_path / "e.npz"
     np.savez(path, points=np.zeros((3, 3)), tets=np.array([[0, 1, 2, 7]]))
@@ -203,12 +203,12 @@ def test_cache_entry_of_wrong_arrays_is_refused(tmp_path):
 
 def test_internal_error_is_one_line(monkeypatch, tmp_path):
     """A bug (not bad input) ends with one line naming the variable that shows the traceback."""
-    import commands.mesh
+    import fingertip.jobs.mesh
 
     def boom(*args, **kwargs):
         raise RuntimeError("unexpected\nstate")
 
-    monkeypatch.setattr(commands.mesh, "run_mesh", boom)
+    monkeypatch.setattr(fingertip.jobs.mesh, "run_mesh", boom)
     monkeypatch.delenv(pipeline.DEBUG_ENV, raising=False)
     code, _, err, _ = cli("mesh", "--preset", "cylinder8", "--out", tmp_path / "m")
     assert code == 1 and err.count("\n") == 1 and err.startswith("error: internal error RuntimeError")

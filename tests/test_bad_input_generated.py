@@ -75,14 +75,14 @@ def work(tmp_path_factory):
         shutil.copy(p, tt / p.name)
     (base / "a_file").write_text("x\n")
     patches = pytest.MonkeyPatch()
-    import fem.mesh
-    import fem.mesh2d
-    import fem.solver
+    import fem.geometry.mesh3d
+    import fem.geometry.mesh2d
+    import fem.core.model
     import reconstruct.pipeline
 
-    patches.setattr(fem.solver.Model, "system", _started)
-    patches.setattr(fem.mesh, "build_mesh", _started)
-    patches.setattr(fem.mesh2d, "run_mesh2d", _started)
+    patches.setattr(fem.core.model.Model, "system", _started)
+    patches.setattr(fem.geometry.mesh3d, "build_mesh", _started)
+    patches.setattr(fem.geometry.mesh2d, "run_mesh2d", _started)
     patches.setattr(reconstruct.pipeline, "reconstruct", _started)
     patches.setenv("FINGERTIP_CACHE_DIR", str(base / "cache"))
     yield base

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import pipeline
-from commands.batch import MeshOptions, parse_subjects, run_batch
+from fingertip.jobs.batch import MeshOptions, parse_subjects, run_batch
 
 SCENE = """\
 [receptors]
@@ -125,7 +125,7 @@ def test_killed_worker_is_retried_and_the_run_completes(tmp_path, scene, serial,
 
 
 def test_a_task_that_keeps_killing_workers_is_reported(cluster):
-    from common.distribute import TaskFailed, TaskRunner, parse_scheduler
+    from fingertip.distribute import TaskFailed, TaskRunner, parse_scheduler
 
     with TaskRunner(parse_scheduler(cluster.scheduler_address), retries=0) as runner:
         results = runner.map(operator.call, [(abs, -2), (abs, -5), (os._exit, 3)])

@@ -6,10 +6,12 @@ import numpy as np
 import pytest
 import scipy.optimize as so
 
-from fem import compliance, contact
-from fem.indentors import make_indentor
-from fem.reference import hertz_sphere
-from common.errors import InputError
+from fem.contact import compliance
+
+from fem.contact import linear as contact
+from fem.contact.indentors import make_indentor
+from fem.verify.closed_forms import hertz_sphere
+from fingertip.errors import InputError
 
 
 # --------------------------------------------------------------------------- half-space compliance

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 import pipeline
-from fem.contact import ContactModel
-from fem.modelfolder import open_model
-from fem.indentors import make_indentor
+from fem.contact.linear import ContactModel
+from fem.io.modelfolder import open_model
+from fem.contact.indentors import make_indentor
 
 
 @pytest.fixture(scope="module")
@@ -93,8 +93,8 @@ def test_thesis_trend_cylinders_at_constant_force(cyl8):
 def test_shipped_scenes_are_valid():
     from pathlib import Path
 
-    from fem.indentors import shapes_for
-    from fem.scene import load_scene
+    from fem.contact.indentors import shapes_for
+    from fem.experiments.scene import load_scene
 
     scenes = sorted((Path(pipeline.__file__).parent / "scenes").glob("*.toml"))
     assert len(scenes) >= 8
@@ -154,7 +154,7 @@ def test_3d_block_model_folder(tmp_path):
     two depths: forces grow, the top face is the contact region, a pressure map is drawn."""
     import meshio
 
-    from fem.reference import box
+    from fem.verify.closed_forms import box
 
     p, cells, r = box(np.linspace(-3, 3, 9), np.linspace(-2, 0, 4), np.linspace(0, 6, 9))
     model_dir = tmp_path / "block"

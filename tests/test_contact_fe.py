@@ -5,10 +5,10 @@ import math
 import numpy as np
 import pytest
 
-from fem.contact import ContactModel
-from fem.indentors import make_indentor
-from fem.reference import box, fine_then_growing, hertz_cylinder, hertz_sphere
-from fem.solver import Model
+from fem.contact.linear import ContactModel
+from fem.contact.indentors import make_indentor
+from fem.verify.closed_forms import box, fine_then_growing, hertz_cylinder, hertz_sphere
+from fem.core.model import Model
 
 
 def half_plane(nu, fine_mm=0.02, size_mm=40.0):
@@ -100,7 +100,7 @@ def test_condensed_compliance_equals_lazy_columns(dim, incline):
 
 def test_receptor_grid_measures_match_solver_sampling():
     """Receptor measures from the cached operator equal the solver's own sampling of the full field."""
-    from fem.receptors import ReceptorSampler, receptor_grid
+    from fem.receptors.grid import ReceptorSampler, receptor_grid
 
     model, system = half_plane(0.48, fine_mm=0.05, size_mm=20.0)
     sn = model.surface_nodes("top")
@@ -149,12 +149,12 @@ def test_hertz_sphere_on_quarter_block():
 
 @pytest.mark.parametrize("dim", [2, 3])
 def test_condensing_only_the_reach_gives_the_full_answer(dim):
-    """A system condensed on the candidates an indentation can reach (fem.contact.reach) gives the
+    """A system condensed on the candidates an indentation can reach (fem.contact.linear.reach) gives the
     same forces, deflections and gaps on every candidate (those outside the reach come with the
     observation solve) and receptor strains as one condensed on all candidates; an indentor beyond
     the reach is refused with a one-line error."""
-    from fem.contact import reach
-    from common.errors import InputError
+    from fem.contact.linear import reach
+    from fingertip.errors import InputError
 
     if dim == 2:
         model, _ = half_plane(0.48, fine_mm=0.05, size_mm=20.0)

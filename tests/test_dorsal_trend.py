@@ -2,7 +2,7 @@
 entire dorsal half moves vertically less than 10 % of the maximum. Dorsal half: the outer surface
 below the section centroid (as in benchmarks/contact_bench.py dorsal).
 
-Human preset: it holds because the proximal cut's core is held (fem.modelfolder.HELD); with that cut
+Human preset: it holds because the proximal cut's core is held (fem.io.modelfolder.HELD); with that cut
 free this model gives 10.6 % (0.5 mm model 11.5 %), the largest motion on the free proximal cut,
 against the thesis's statement that deformation fades faster proximally than distally.
 
@@ -13,7 +13,7 @@ relative to the section, it holds. The test pins both so that a change to either
 import pytest
 
 import pipeline
-from fem.thesis3d import dorsal_ratios
+from fem.thesis.chapters5_7 import dorsal_ratios
 
 
 def _dorsal_ratios(tmp_path, preset, depths_mm):
@@ -35,7 +35,7 @@ def test_monkey_dorsal_half_is_under_10_percent_at_1_mm_but_not_at_2_mm(tmp_path
     (surface2, _, proximal, distal), (surface1, _, _, _) = _dorsal_ratios(tmp_path, "monkey", [2.0, 1.0])
     assert 0.10 < surface2 < 0.17, surface2                    # measured 11.8-13.6 % (1.0 mm meshes)
     assert 0.03 < surface1 < 0.10, surface1                    # measured 6.1 %
-    # Only the proximal cut's core is held (its skin goes on proximally, fem.modelfolder.HELD): on this
+    # Only the proximal cut's core is held (its skin goes on proximally, fem.io.modelfolder.HELD): on this
     # short body, the load 3.75 mm from the cut, the cut's skin moves more than the distal cut
     # (11.5 % against 8.3 %), against the thesis's order, which the human model keeps.
     assert 0.05 < proximal < 0.15 and 0.05 < distal < 0.15, (proximal, distal)

@@ -4,8 +4,8 @@ import math
 import numpy as np
 import pytest
 
-from fem import indentors as ind
-from common.errors import InputError
+from fem.contact import indentors as ind
+from fingertip.errors import InputError
 
 RNG = np.random.default_rng(3)
 

@@ -1,4 +1,4 @@
-"""fem.linalg: PARDISO's Schur complement and Schur-path solves against dense linear algebra,
+"""fem.core.linalg: PARDISO's Schur complement and Schur-path solves against dense linear algebra,
 the refined saddle solve, BLAS thread limits, and no environment changes."""
 import os
 from pathlib import Path
@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from fem import reference as ref
-from fem.linalg import Pardiso, SaddleFactor, blas_threads, solve_refined
-from fem.solver import Model
+from fem.verify import closed_forms as ref
+from fem.core.linalg import Pardiso, SaddleFactor, blas_threads, solve_refined
+from fem.core.model import Model
 
 
 def _saddle(n=40, m=12, seed=0):
@@ -191,7 +191,7 @@ def test_blas_limit_reaches_pardiso_loaded_after_a_first_limit():
     import subprocess
     import sys
 
-    code = ("from fem.linalg import blas_threads, _thread_controller\n"
+    code = ("from fem.core.linalg import blas_threads, _thread_controller\n"
             "with blas_threads(1): pass\n"
             "import pypardiso\n"
             "with blas_threads(1):\n"
@@ -206,7 +206,7 @@ def test_drop_round_off_leaves_a_pattern_free_of_summation_order():
     """Entries at round-off of the diagonal scale (and explicit zeros) go, the diagonal and every
     entry above the threshold stay: two matrices that differ only by round-off-sized entries get
     the same pattern, hence the same PARDISO ordering."""
-    from fem.linalg import drop_round_off
+    from fem.core.linalg import drop_round_off
 
     rng = np.random.default_rng(3)
     n = 60

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 import pipeline
-from fem.mesh import boundary_faces, label_tets, quality, straddle_check, tet_volumes
-from fem.model import model_from_args, params_for
-from common.errors import InputError
+from fem.geometry.mesh3d import boundary_faces, label_tets, quality, straddle_check, tet_volumes
+from fem.geometry.layered import model_from_args, params_for
+from fingertip.errors import InputError
 
 ARGS = ["mesh", "--preset", "monkey", "--size", "0.8", "--quiet"]
 
@@ -120,7 +120,7 @@ def test_cache_returns_the_same_mesh_and_keys_change_with_inputs(built, tmp_path
     assert info2["mesh"]["from_cache"] is True
     assert np.array_equal(m1.points, m2.points) and np.array_equal(m1.cells_dict["tetra"], m2.cells_dict["tetra"])
     # a changed parameter changes the key (no stale mesh): bone offset 0.1 must not hit the cache
-    from fem.mesh import Sizing, mesh_key
+    from fem.geometry.mesh3d import Sizing, mesh_key
 
     base = model_from_args(None, "monkey", params_for("monkey"))
     other = model_from_args(None, "monkey", params_for("monkey", bone_offset_mm=0.1))
@@ -129,7 +129,7 @@ def test_cache_returns_the_same_mesh_and_keys_change_with_inputs(built, tmp_path
 
 
 def test_sizing_field_is_fine_under_the_pad_and_grows_inwards_and_dorsally():
-    from fem.mesh import Sizing, sizing_values
+    from fem.geometry.mesh3d import Sizing, sizing_values
 
     model = model_from_args(None, "human", params_for("human"))
     k = len(model.z_mm) // 2
@@ -146,7 +146,7 @@ def test_sizing_field_is_fine_under_the_pad_and_grows_inwards_and_dorsally():
 
 
 def test_force_rebuilds_while_a_normal_run_uses_the_cache(built, monkeypatch):
-    import fem.mesh as fm
+    import fem.geometry.mesh3d as fm
 
     _, cache = built
     with np.load(next(cache.rglob("*.npz"))) as d:
@@ -181,7 +181,7 @@ def test_rerun_skips_current_outputs_and_region_changes_reuse_the_tets(built, tm
 def test_monkey_size_sections_json_meshes_with_size_defaults(built, tmp_path, monkeypatch, capsys):
     """A monkey-size replica needs no --layer3/--bone-offset: the defaults follow the section size,
     are printed and recorded in model.json; an explicit flag still wins."""
-    from fem.model import preset_sections
+    from fem.geometry.layered import preset_sections
 
     z, polys, _ = preset_sections("monkey")
     src = tmp_path / "replica"
@@ -201,10 +201,10 @@ def test_monkey_size_sections_json_meshes_with_size_defaults(built, tmp_path, mo
 
 
 def test_receptor_sites_skip_the_end_cuts(built):
-    """Receptor sites come from the volar nodes off the end cuts (fem.modelfolder.receptor_surface), so
+    """Receptor sites come from the volar nodes off the end cuts (fem.io.modelfolder.receptor_surface), so
     every receptor point lies in the mesh, at least a node spacing inside the cut planes."""
-    from fem.modelfolder import read_model, receptor_surface
-    from fem.receptors import ReceptorSampler, receptor_grid
+    from fem.io.modelfolder import read_model, receptor_surface
+    from fem.receptors.grid import ReceptorSampler, receptor_grid
 
     model, _ = read_model(built[0])
     sn = model.surface_nodes("volar")
@@ -222,7 +222,7 @@ def test_receptor_sites_skip_the_end_cuts(built):
 def test_bar_along_the_axis_presses_the_skin_of_the_proximal_cut(built, tmp_path):
     """Only the proximal cut's core (layers 3-5) is held, so a bar as long as the finger indents
     the cut's skin instead of stopping at a fixed rim (it did while the whole cut was held)."""
-    from fem.modelfolder import held_regions, read_model
+    from fem.io.modelfolder import held_regions, read_model
 
     model, _ = read_model(built[0])
     assert "proximal_core" in held_regions(model) and "proximal" not in held_regions(model)
@@ -246,8 +246,8 @@ def test_3d_scenes_run_on_the_preset(built, tmp_path, scene):
 
     from dataclasses import replace
 
-    from commands.indent import indent_folder
-    from fem.scene import Output, load_scene
+    from fingertip.jobs.indent import indent_folder
+    from fem.experiments.scene import Output, load_scene
 
     spec = replace(load_scene(Path(pipeline.__file__).parent / "scenes" / f"{scene}.toml"),
                    output=Output(plots=False, pvd=False))

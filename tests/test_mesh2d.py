@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import pipeline
-from fem.mesh2d import Sizing2D, mesh_domain, section_domain
+from fem.geometry.mesh2d import Sizing2D, mesh_domain, section_domain
 
 
 def read(out):
@@ -70,7 +70,7 @@ def test_thesis_2d_models(tmp_path, preset, bone, exact_area):
 
 
 def test_section_of_the_3d_model_has_five_conforming_layers(tmp_path):
-    from fem.model import model_from_args, params_for
+    from fem.geometry.layered import model_from_args, params_for
 
     model = model_from_args(None, "human", params_for("human"))
     dom = section_domain(model, 7.0)

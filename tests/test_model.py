@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 import pipeline
-from fem.model import ModelParams, build_model, model_from_args, params_for
-from common.errors import InputError
+from fem.geometry.layered import ModelParams, build_model, model_from_args, params_for
+from fingertip.errors import InputError
 
 
 def circle(r, n=360, c=(0.0, 0.0)):
@@ -32,7 +32,7 @@ def test_cylinder_layer_volumes_match_closed_form():
 
 
 def test_skin_thickness_is_constant_all_round_on_the_human_preset():
-    from fem.model import _min_gap, check_polygon, preset_sections
+    from fem.geometry.layered import _min_gap, check_polygon, preset_sections
 
     z, polys, _ = preset_sections("human")
     m = build_model(z, polys, params_for("human"))
@@ -60,7 +60,7 @@ def test_presets_have_the_thesis_sizes_and_nested_outward_shells():
 
 
 def test_outer_volume_matches_the_parametric_fingertip():
-    from fem.presets import make_shape
+    from fem.geometry.presets import make_shape
 
     m = model_from_args(None, "monkey", params_for("monkey"))
     shape = make_shape("fingertip", preset="monkey", rod=False)
@@ -145,8 +145,8 @@ def test_tilted_distal_end_up_the_top_is_the_flat_cut_rim_or_the_rounded_pad():
     rim of a flat distal cut, but on the pad of a rounded tip, where the tip has turned 30 deg."""
     from dataclasses import replace
 
-    from fem.experiments import scene_position
-    from fem.indentors import approach_direction
+    from fem.experiments.runner import scene_position
+    from fem.contact.indentors import approach_direction
 
     place = {"approach": approach_direction(-30.0)}
     for tip in (0.0, 3.5):
@@ -231,7 +231,7 @@ def test_other_bad_options_are_refused(tmp_path, capsys):
 
 
 def test_sections_json_with_the_tip_is_cut_before_the_rounded_tip(tmp_path):
-    from fem.presets import make_shape
+    from fem.geometry.presets import make_shape
 
     shape = make_shape("fingertip", preset="human", rod=False)
     z = np.arange(0.0, 21.75, 0.5)                      # body 0-15 mm, rounded tip 15-22 mm
@@ -259,14 +259,14 @@ def test_inclined_support_is_recorded_with_the_vertical_direction():
 # ------------------------------------------------------------------ layer-3 and bone-offset defaults by size
 def preset_replica(tmp_path, preset, scale=1.0):
     """sections.json of a preset's sections scaled in x and y by `scale` (a replica of that size)."""
-    from fem.model import preset_sections
+    from fem.geometry.layered import preset_sections
 
     z, polys, _ = preset_sections(preset)
     return write_sections(tmp_path / f"{preset}_{scale:g}", [scale * p for p in polys], z)
 
 
 def test_preset_middle_widths_and_size_rule_reproduce_the_presets():
-    from fem.model import PRESET_MIDDLE_WIDTH_MM, PRESET_PARAMS, preset_sections, size_defaults
+    from fem.geometry.layered import PRESET_MIDDLE_WIDTH_MM, PRESET_PARAMS, preset_sections, size_defaults
 
     for preset, width in PRESET_MIDDLE_WIDTH_MM.items():
         z, polys, _ = preset_sections(preset)

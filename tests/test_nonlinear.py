@@ -6,9 +6,10 @@ import pytest
 import scipy.sparse as sp
 from scipy.optimize import brentq
 
-from fem.nonlinear import NeoHookean, compare_line_load, line_load_model
-from fem.reference import box
-from fem.solver import Model
+from fem.biomech.line_load import compare_line_load, line_load_model
+from fem.core.neohookean import NeoHookean
+from fem.verify.closed_forms import box
+from fem.core.model import Model
 from test_biomech import section  # noqa: F401  (the coarse monkey section fixture)
 
 

@@ -9,7 +9,7 @@ import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 
 import pipeline
-from common.progress import SILENT, Progress, TimingHistory, as_progress
+from fingertip.progress import SILENT, Progress, TimingHistory, as_progress
 from fem import plots
 
 

@@ -12,11 +12,11 @@ import json, os, sys
 import matplotlib
 env0, rc_backend0 = dict(os.environ), dict.__getitem__(matplotlib.rcParams, "backend")   # unresolved
 
-from fem.mesh2d import Sizing2D, preset_domain, run_mesh2d
-from fem.modelfolder import read_model
-from fem.scene import Scene
-from fem.experiments import run_experiments
-from fem.runfolder import IndentRun, write_run
+from fem.geometry.mesh2d import Sizing2D, preset_domain, run_mesh2d
+from fem.io.modelfolder import read_model
+from fem.experiments.scene import Scene
+from fem.experiments.runner import run_experiments
+from fem.io.runfolder import IndentRun, write_run
 from fem import plots
 
 folder = sys.argv[1]

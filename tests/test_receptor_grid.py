@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from fem.receptors import receptor_grid
+from fem.receptors.grid import receptor_grid
 
 
 def arc(x):

@@ -14,7 +14,7 @@ import trimesh
 
 import pipeline
 from reconstruct.pipeline import reconstruct, sections_document
-from fem.presets import make_shape, shape_from_truth
+from fem.geometry.presets import make_shape, shape_from_truth
 from reconstruct.synthetic import compare_to_truth, load_truth, render_turntable
 from reconstruct.turntable import load_turntable
 

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 import pipeline
-from common.errors import InputError
-from fem.presets import make_shape, shape_from_truth
+from fingertip.errors import InputError
+from fem.geometry.presets import make_shape, shape_from_truth
 from reconstruct.checks import consistent_sections, fold_depth
 from reconstruct.pipeline import reconstruct, sections_document
 from reconstruct.sections import support_curve

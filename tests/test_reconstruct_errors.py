@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import pipeline
-from fem.presets import make_shape
+from fem.geometry.presets import make_shape
 from reconstruct.synthetic import render_turntable
 
 SMALL = dict(size_px=(200, 260), mm_per_px=0.16, blur_px=0.8, noise=2.0, n_views=24)

@@ -1,4 +1,4 @@
-"""Thesis chapter-4 claims (fem.thesis2d) on coarse 2D models, and `pipeline.py reproduce`: report, resume,
+"""Thesis chapter-4 claims (fem.thesis.chapter4) on coarse 2D models, and `pipeline.py reproduce`: report, resume,
 refusals. The dorsal-half claim (3D) is pinned by tests/test_dorsal_trend.py."""
 import json
 
@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 import pipeline
-from fem import thesis, thesis2d
-from fem.findings import DIFFERS, REPRODUCED
+from fem.thesis import claims as thesis
+from fem.thesis import chapter4 as thesis2d
+from fem.thesis.findings import DIFFERS, REPRODUCED
 
 
 def _by_key(findings):
@@ -93,7 +94,7 @@ def test_reproduce_refuses_a_foreign_or_other_kind_of_folder(tmp_path, capsys):
 
 
 def test_report_tables_take_the_union_of_row_columns():
-    from commands.reproduce import _table
+    from fingertip.jobs.reproduce import _table
 
     keys, rows = _table([{"model": "3D", "layer": 2, "most_affected_mm": 1.25}, {"model": "2D", "change_mm": -0.5}])
     assert keys == ["model", "layer", "most_affected_mm", "change_mm"]

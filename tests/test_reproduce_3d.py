@@ -1,11 +1,11 @@
-"""Thesis chapters 6-7 claims on the 3D monkey preset (1 mm elements, fem.thesis3d): the bar in
+"""Thesis chapters 6-7 claims on the 3D monkey preset (1 mm elements, fem.thesis.chapters5_7): the bar in
 3D (figures 6-25, 7-4), the 2D section against 3D (figures 7-2, 7-3) and step 5 across the pad
 (figure 6-39). The cylinder series and layer study behind the other 3D claims are pinned on 2D
 models in tests/test_biomech.py; dorsal ratios in tests/test_dorsal_trend.py."""
 import pytest
 
-from fem import thesis3d
-from fem.findings import DIFFERS, REPRODUCED
+from fem.thesis import chapters5_7 as thesis3d
+from fem.thesis.findings import DIFFERS, REPRODUCED
 
 
 def _by_key(findings):
@@ -62,7 +62,7 @@ def test_layer2_sense_turns_with_the_skin_thickness(shop):
     deflection 0.5 mm from a 2 mm wedge by -0.39 mm (sign change 1.55 mm); the thesis's prescribed
     nodal line gives -0.47 mm linear and -0.46 mm neo-Hookean; a 0.25 + 0.25 mm skin gives
     +0.26 mm (more deflection from 0.17 to 2.58 mm), the thesis's sense."""
-    from fem.biomech import DeflectionExperiment
+    from fem.biomech.deflection import DeflectionExperiment
 
     section = shop.folder("monkey_section", thesis3d.monkey_section(5.0))
     exp = DeflectionExperiment(section)

@@ -1,11 +1,11 @@
-"""Thesis 4.2-4.5 claims (fem.thesis2d: point load, two points, bars, gratings, gaps) on the coarse
+"""Thesis 4.2-4.5 claims (fem.thesis.chapter4: point load, two points, bars, gratings, gaps) on the coarse
 2D models of a quick Workshop (0.25 mm elements). The numbers in the docstrings were measured on
 them; where the 0.125 mm models give another verdict it is said."""
 import numpy as np
 import pytest
 
-from fem import thesis2d
-from fem.findings import DIFFERS, REPRODUCED
+from fem.thesis import chapter4 as thesis2d
+from fem.thesis.findings import DIFFERS, REPRODUCED
 
 
 def _by_key(findings):

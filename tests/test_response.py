@@ -1,4 +1,4 @@
-"""Stored response models (fem.response): the same forces, deflections and receptor measures as
+"""Stored response models (fem.experiments.response): the same forces, deflections and receptor measures as
 the factorised path, keys that follow every input, corrupt files rebuilt, and `prepare` + `indent`."""
 import csv
 import json
@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 import pipeline
-from commands.indent import scene_of_flags
-from fem.experiments import run_experiments
-from fem.modelfolder import read_model
-from fem.response import ResponseStore, response_key
+from fingertip.jobs.indent import scene_of_flags
+from fem.experiments.runner import run_experiments
+from fem.io.modelfolder import read_model
+from fem.experiments.response import ResponseStore, response_key
 
 RTOL = 1e-9
 """Stored against factorised: both solve the same linear system, once by a Schur complement of a
@@ -72,8 +72,8 @@ def test_stored_equals_factorised(which, indentor, depth, orientation, request):
 
 
 def test_key_follows_inputs(cyl8):
-    from fem.modelfolder import CONTACT_REGION, receptor_surface
-    from fem.receptors import receptor_grid
+    from fem.io.modelfolder import CONTACT_REGION, receptor_surface
+    from fem.receptors.grid import receptor_grid
 
     def key(material=None, nu=None, approach=(0, -1, 0), depths=(0.5, 0.75, 1.0), spacing=1.0):
         model, _ = read_model(cyl8, material, nu)
@@ -167,7 +167,7 @@ def test_mesh_hash_is_remembered_until_the_mesh_changes(cyl8, tmp_path, monkeypa
     inode, size or time) is hashed again."""
     import shutil
 
-    from fem import response
+    from fem.experiments import response
 
     folder = tmp_path / "copy"
     shutil.copytree(cyl8, folder, ignore=shutil.ignore_patterns("response", "indent_*"))

@@ -5,7 +5,7 @@ import meshio
 import numpy as np
 
 import pipeline
-from fem.presets import Fingertip
+from fem.geometry.presets import Fingertip
 from reconstruct.synthetic import render_turntable
 
 

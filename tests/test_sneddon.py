@@ -5,7 +5,7 @@ vertical stress under each pin with Sneddon's closed form (transduction.py
 `circ_load_vert_stress`) and the pin force from its depth with P = 2 a E d / (1 - nu^2)
 (`skin_touch_profile`), for E = 0.05 MPa, nu = 0.4.
 
-Punch radius a = 1 mm, depth 0.5 mm, on fem.halfspace.flat_block_model's default block: a quarter
+Punch radius a = 1 mm, depth 0.5 mm, on fem.verify.halfspace.flat_block_model's default block: a quarter
 block 80 x 80 mm, 80 mm deep, bottom fixed, sides free, 0.25 mm P2 tets under the punch and down to
 2.5 mm, O-grid plan with the punch edge a ring of vertices (115,593 DOFs; block, factorisation and
 indentation 10-16 s on 2 cores, 1.9 GB). TouchSim's default pin radius, 0.05 mm
@@ -31,8 +31,8 @@ Measured (this mesh; benchmarks/sneddon_check.py for a finer one):
 import numpy as np
 import pytest
 
-from fem.halfspace import flat_block_model
-from fem.reference import boussinesq, sneddon_punch_force_N, sneddon_punch_stress_zz_MPa
+from fem.verify.halfspace import flat_block_model
+from fem.verify.closed_forms import boussinesq, sneddon_punch_force_N, sneddon_punch_stress_zz_MPa
 
 RADIUS_MM, DEPTH_MM, E_MPA, NU = 1.0, 0.5, 0.05, 0.4
 AFFERENT_DEPTHS_MM = {"SA1": 0.3, "RA": 1.6, "PC": 2.0}
@@ -155,13 +155,13 @@ def test_whole_block_matches_the_quarter():
 def test_afferents_on_the_block_spike_as_on_the_published_half_space(punched):
     """The same ramp-and-hold (to 1 mm in 0.1 s, held 0.5 s, released in 0.1 s; the block is linear
     and the punch in full contact from the first touch, so every input scales with the depth)
-    through fem.transduction, once with the FE stress at the afferent and once with Sneddon's at
+    through fem.receptors.transduction, once with the FE stress at the afferent and once with Sneddon's at
     Sneddon's force, as the published model computes it; the surface under the punch moves with
     it in both. Every SA1 model at r = 0 and 0.5 a, 0.3 mm deep, and every RA model at r = 0,
     1.6 mm: spike counts within 5 % (at least 1 spike), first spikes within 1 ms. Measured: equal
     counts for all 17 afferents (SA1 9-25, RA 3-8 spikes) and identical first spikes (inputs
     within 2.8 %, sampled every 5 ms)."""
-    from fem.transduction import class_data, dynamic_input, resample, spike_trains
+    from fem.receptors.transduction import class_data, dynamic_input, resample, spike_trains
 
     _, syy, _, _ = punched
     pts = _points()

@@ -13,12 +13,13 @@ import numpy as np
 import pytest
 
 import pipeline
-from common.errors import InputError
-from fem import Model, mesh2d
-from fem.contact import ContactModel
-from fem.indentors import make_indentor
-from fem.materials import FLUID_LAYER
-from fem.modelfolder import factorise, open_model, read_model
+from fingertip.errors import InputError
+from fem import Model
+from fem.geometry import mesh2d
+from fem.contact.linear import ContactModel
+from fem.contact.indentors import make_indentor
+from fem.core.materials import FLUID_LAYER
+from fem.io.modelfolder import factorise, open_model, read_model
 
 SIZE = mesh2d.Sizing2D(size_mm=0.25)        # coarse: the whole file runs in a few seconds
 

@@ -8,9 +8,10 @@ from skfem import Basis, BilinearForm, asm
 from skfem.helpers import div
 
 from fem import InputError, Model
-from fem import reference as ref
-from fem.materials import Material
-from fem.measures import MEASURES
+from fem.verify import closed_forms as ref
+from fem.core.materials import Material
+from fem.core.measures import MEASURES
+from fem.io.vtu import write_solution
 
 E = 0.01          # MPa (1e4 Pa)
 SYMMETRY_3D = {"sym_x": (0, None, None), "sym_y": (None, 0, None), "sym_z": (None, None, 0)}
@@ -68,7 +69,7 @@ LAME = {3: (ref.sphere_octant_shell, (10, 6), SYMMETRY_3D, ref.lame_sphere),
 def test_lame_sphere_and_plane_strain_cylinder(dim, nu):
     """Octant of a thick sphere / quarter of a thick cylinder (a = 1, b = 2 mm), internal pressure;
     the faceted surfaces carry the exact Lame traction so only the solver's error is measured
-    (fem.reference.radial_traction). Measured: sphere u 0.25-0.27 %, mean stress 0.8-1.6 % (max
+    (fem.verify.closed_forms.radial_traction). Measured: sphere u 0.25-0.27 %, mean stress 0.8-1.6 % (max
     over elements); cylinder 0.02 % and 0.1 %."""
     a, b, p = 1.0, 2.0, 0.01
     mesh, (n_arc, n_rad), symmetry, exact = LAME[dim]
@@ -231,13 +232,14 @@ def test_divergence_matrix_is_skfem_assembly(block3d):
     for m in (Model(block3d.mesh.p.T, block3d.mesh.t.T, block3d.layer), Model(pts, cells, np.ones(len(cells)))):
         divergence = BilinearForm(lambda u, q, w: div(u) * q)
         expected = asm(divergence, Basis(m.mesh, m.element, intorder=2), m.pressure_basis)
-        assert abs(m._B - expected).max() < 1e-14 * abs(expected).max()
+        assert abs(m.discretisation.B - expected).max() < 1e-14 * abs(expected).max()
 
 
 def test_with_material_shares_geometry_and_solves_as_a_new_model():
-    """Model.with_material: the mesh-only caches are the same objects, the material-dependent
-    ones are rebuilt, and a solve equals that of a model built afresh with the material, bit for
-    bit (same arithmetic); the source model is untouched."""
+    """Model.with_material: both models stand on one Discretisation (the mesh-only caches are
+    the same objects), the material-dependent ones are the model's own, and a solve equals that
+    of a model built afresh with the material, bit for bit (same arithmetic); the source model is
+    untouched."""
     pts, cells, regions = ref.box(np.linspace(0, 2, 5), np.linspace(0, 1, 4), np.linspace(0, 1, 3))
     layer = np.where(pts[cells].mean(axis=1)[:, 1] > 0.5, 1, 2)
     first = Model(pts, cells, layer, regions, material="m43", nu=0.48)
@@ -247,8 +249,10 @@ def test_with_material_shares_geometry_and_solves_as_a_new_model():
     fresh = Model(pts, cells, layer, regions, material="m35", nu=0.45)
     u_other, u_fresh = other.solve(prescribed=bc).u, fresh.solve(prescribed=bc).u
     assert np.array_equal(u_other, u_fresh) and not np.allclose(u_other, u_first)
-    for name in ("scalar_basis", "_B", "_node_pairs", "pressure_basis"):
-        assert other.__dict__[name] is first.__dict__[name]
+    assert other.discretisation is first.discretisation
+    for name in ("scalar_basis", "B", "stiffness_pattern", "pressure_basis"):
+        assert name in first.discretisation.__dict__
+    assert not set(first.__dict__) & {"scalar_basis", "B", "stiffness_pattern", "pressure_basis", "nodes"}
     assert other.K_dev is not first.K_dev and (other.K_dev != fresh.K_dev).nnz == 0
     assert np.array_equal(first.solve(prescribed=bc).u, u_first)
     assert first.with_material(Material("m53")).material.code == "m53"
@@ -279,7 +283,7 @@ def test_from_mesh_save_vtu_and_csv(tmp_path):
     assert set(model.regions) == {"nail", "pad"}
     sol = model.solve(prescribed={"nail": 0.0, "pad": (0, -0.1, 0)})
     points = np.array([[0.5, 0.8, 0.5], [0.2, 0.3, 0.7]])
-    sol.save(tmp_path / "out" / "static.vtu", points=points)
+    write_solution(tmp_path / "out" / "static.vtu", sol, points=points)
     back = meshio.read(tmp_path / "out" / "static.vtu")
     assert back.cells[0].type == "tetra10" and len(back.cells[0].data) == len(cells)
     conn = back.cells[0].data
@@ -297,7 +301,7 @@ def test_from_mesh_save_vtu_and_csv(tmp_path):
 def test_triangle6_export(tmp_path):
     pts, cells, regions = ref.box(np.linspace(0, 1, 3), np.linspace(0, 1, 3))
     model = Model(pts, cells, np.ones(len(cells)), regions)
-    model.solve(prescribed={"ymin": 0.0, "ymax": (0.01, 0)}).save(tmp_path / "s.vtu")
+    write_solution(tmp_path / "s.vtu", model.solve(prescribed={"ymin": 0.0, "ymax": (0.01, 0)}))
     back = meshio.read(tmp_path / "s.vtu")
     conn = back.cells[0].data
     assert back.cells[0].type == "triangle6"

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from fem import Model
-from fem import reference as ref
+from fem.verify import closed_forms as ref
 
 E = 0.01   # MPa
 DEPTHS = (0.5, 0.75, 1.0)

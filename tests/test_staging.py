@@ -1,10 +1,10 @@
-"""common.staging: the shared output-folder check and atomic output."""
+"""fingertip.staging: the shared output-folder check and atomic output."""
 import os
 
 import pytest
 
-from common.errors import InputError
-from common.staging import check_output_dir, staged_output
+from fingertip.errors import InputError
+from fingertip.staging import check_output_dir, staged_output
 
 
 def test_existing_and_new_folders_pass_and_nothing_is_left(tmp_path):

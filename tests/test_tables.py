@@ -7,7 +7,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from common.tables import _cells, csv_text
+from fingertip.tables import _cells, csv_text
 
 
 def _csv_module(columns, nan=None) -> str:

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import pipeline
-from fem.mesh import tet_volumes
+from fem.geometry.mesh3d import tet_volumes
 
 ARGS = ["mesh", "--preset", "monkey", "--size", "0.8", "--tip", "rounded", "--support-incline", "-30", "--quiet"]
 Z1, TIP = 7.5, 3.5                     # monkey preset: body 0-7.5 mm, ellipsoidal cap 3.5 mm long
@@ -55,8 +55,8 @@ def force_displacement(built, tmp_path_factory):
 
     from dataclasses import replace
 
-    from commands.indent import indent_folder
-    from fem.scene import Experiment, Output, load_scene
+    from fingertip.jobs.indent import indent_folder
+    from fem.experiments.scene import Experiment, Output, load_scene
 
     spec = load_scene(Path(pipeline.__file__).parent / "scenes" / "force_displacement.toml")
     punch = Experiment.from_dict({"name": "punch3", "indentor": "punch:3", "position_mm": "top",

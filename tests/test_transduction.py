@@ -1,4 +1,4 @@
-"""TouchSim spiking transduction (fem.transduction): exact agreement with a scalar transcription of
+"""TouchSim spiking transduction (fem.receptors.transduction): exact agreement with a scalar transcription of
 the published algorithm, TouchSim's own regression values, behaviour of the published SA1 / RA
 models on a ramp-and-hold, reproducible noise, the data file and bad input. No finite elements."""
 import json
@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from common.errors import InputError
-from fem import transduction as tr
-from fem.transduction import (CLASSES, LIF_RATE_HZ, class_data, dynamic_input, post_spike_basis,
+from fingertip.errors import InputError
+from fem.receptors import transduction as tr
+from fem.receptors.transduction import (CLASSES, LIF_RATE_HZ, class_data, dynamic_input, post_spike_basis,
                               rates_hz, resample, spike_trains)
 
 E_STAR = 0.05 / (1 - 0.4 ** 2)      # TouchSim skin: E = 0.05 MPa, nu = 0.4 -> E* = 0.0595 MPa

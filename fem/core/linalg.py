@@ -1,0 +1,462 @@
+"""Linear algebra of the FE stage: BLAS thread limits and sparse symmetric indefinite solves.
+
+    blas_threads(limit)                    context manager limiting BLAS threads (None: no limit)
+    Pardiso(upper, schur=None)             MKL PARDISO LDL^T of a symmetric matrix (upper triangle,
+                                           CSR), optionally with the dense Schur complement onto rows;
+                                           `solve_schur` for loads on those rows only (backward
+                                           substitution alone)
+    SaddleFactor(Kdev, B, D, ...)          K = Kdev + B^T D^-1 B solved through the factorised
+                                           quasi-definite [[Kdev, B^T], [B, -D]], with refinement on K
+    solve_refined(A, b)                    one solve of a sparse symmetric indefinite A, one step of
+                                           iterative refinement
+
+PARDISO comes from MKL through pypardiso; without pypardiso SciPy's SuperLU is used (much slower,
+with a warning). Every call into pypardiso's internals is in this module: `Pardiso` calls MKL's
+`pardiso` entry point through ctypes itself, on the shared library that pypardiso loads. pypardiso
+documents no API for that library handle, so pyproject.toml pins pypardiso to its 0.4 series.
+"""
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import functools
+import os
+import sys
+import warnings
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+from fingertip.errors import InputError
+
+
+# --------------------------------------------------------------------------- BLAS threads
+def _thread_controller():
+    """threadpoolctl's view of the loaded BLAS libraries: scanned again once pypardiso has loaded
+    MKL (a view taken before would leave PARDISO's threads unlimited), else cached."""
+    return _scanned("pypardiso" in sys.modules)
+
+
+@functools.lru_cache(maxsize=2)
+def _scanned(with_mkl: bool):  # noqa: ARG001 - the cache key
+    """threadpoolctl's ThreadpoolController (a scan of the loaded libraries, about 10 ms), one
+    per `with_mkl` (whether pypardiso is imported).
+
+    Importing threadpoolctl sets KMP_DUPLICATE_LIB_OK in the environment (to tolerate several
+    OpenMP runtimes); the library leaves the caller's environment as it found it, so that entry is
+    removed again unless the caller had set it."""
+    had = "KMP_DUPLICATE_LIB_OK" in os.environ
+    from threadpoolctl import ThreadpoolController
+
+    if not had:
+        os.environ.pop("KMP_DUPLICATE_LIB_OK", None)
+    return ThreadpoolController()
+
+
+def blas_threads(limit: int | None):
+    """Context manager limiting BLAS threads to `limit` (None: no limit)."""
+    return contextlib.nullcontext() if limit is None else _thread_controller().limit(limits=limit, user_api="blas")
+
+
+SERIAL_BLAS_BELOW = 1500
+"""Dense symmetric factorisations (and their solves and inverses) smaller than this run on one BLAS
+thread: for such small matrices a second thread mostly waits for the other core, which is often
+busy, and can slow them several times over (a 201 x 201 Cholesky factorisation: a fraction of a
+millisecond on one thread, tenths of a second on two OpenBLAS threads of a loaded 2-core machine)."""
+
+
+def dense_threads(n: int):
+    """`blas_threads` for dense work on an (n, n) matrix: one thread below SERIAL_BLAS_BELOW."""
+    return blas_threads(1 if n < SERIAL_BLAS_BELOW else None)
+
+
+# --------------------------------------------------------------------------- PARDISO
+def _pardiso_available(stacklevel: int) -> bool:
+    """Whether pypardiso imports; warns (at `stacklevel` above the caller) when it does not."""
+    try:
+        import pypardiso  # noqa: F401
+    except ImportError:
+        warnings.warn("pypardiso is not installed: using SciPy SuperLU, about 50x slower "
+                      "(pip install pypardiso)", stacklevel=stacklevel + 1)
+        return False
+    return True
+
+
+_PT = ctypes.c_int64 if ctypes.sizeof(ctypes.c_void_p) == 8 else ctypes.c_int32     # PARDISO's handle words
+_I32 = ctypes.POINTER(ctypes.c_int32)
+_F64 = ctypes.POINTER(ctypes.c_double)
+
+
+@functools.lru_cache(maxsize=1)
+def _mkl_pardiso():
+    """MKL's `pardiso` as a ctypes function, located once per process.
+
+    pypardiso finds libmkl_rt when a PyPardisoSolver is built (without find_library's help by a
+    recursive glob over the environment, every time); the library its import-time solver loaded
+    is used and its `pardiso` symbol wrapped here, as a function object of this module's own (no
+    environment variable or pypardiso state is changed)."""
+    try:                                            # the solver pypardiso built on import
+        from pypardiso.scipy_aliases import pypardiso_solver as solver
+    except ImportError:                             # (a new one searches the environment again)
+        from pypardiso import PyPardisoSolver
+
+        solver = PyPardisoSolver()
+    fn = solver.libmkl["pardiso"]                   # indexing gives a new function object
+    fn.argtypes = [ctypes.POINTER(_PT), _I32, _I32, _I32, _I32, _I32, ctypes.c_void_p, _I32, _I32, _I32,
+                   _I32, _I32, _I32, ctypes.c_void_p, ctypes.c_void_p, _I32]
+    fn.restype = None
+    return fn
+
+
+class Pardiso:
+    """MKL PARDISO LDL^T (mtype -2) of a symmetric matrix given by its upper triangle (CSR),
+    factorised once; `solve` runs the solve phase (33) directly on Fortran-ordered blocks.
+
+    iparm is set explicitly (the defaults for mtype -2: METIS nested dissection, 1e-8 pivot
+    perturbation, Bunch-Kaufman within supernodes) except that PARDISO's own iterative refinement
+    is off (the caller refines where a residual asks for it, see `SaddleFactor`).
+    mkl_defaults: use PARDISO's default settings instead (iparm[0] = 0, as pypardiso's public
+    solver does; they refine inside every solve); no Schur complement then.
+
+    schur: optional sorted (k,) row indices. PARDISO then orders them last and returns the dense
+    Schur complement S = A_SS - A_SI A_II^-1 A_IS (k, k) with a partial factorisation of the rest
+    (iparm[35] = 2); a solve is forward substitution (phase 331, which leaves the reduced
+    right-hand side in the Schur rows), a dense Cholesky solve with S there, and backward
+    substitution (phase 333). S must be positive definite (true for the displacement rows of a
+    quasi-definite matrix). Raises pypardiso's PyPardisoError when PARDISO fails and
+    np.linalg.LinAlgError for an empty row or an S that is not positive definite.
+    """
+
+    def __init__(self, upper: sp.csr_matrix, schur: np.ndarray | None = None, mkl_defaults: bool = False):
+        from pypardiso.pardiso_wrapper import PyPardisoError
+
+        self._error = PyPardisoError
+        self._call = _mkl_pardiso()
+        upper = sp.csr_matrix(upper)
+        upper.sort_indices()
+        self.n = upper.shape[0]
+        if not np.diff(upper.indptr).all():                 # PARDISO crashes on empty rows
+            raise np.linalg.LinAlgError("the matrix has empty rows")
+        self._data = np.ascontiguousarray(upper.data, dtype=np.float64)
+        self._ia = (upper.indptr + 1).astype(np.int32)      # PARDISO's default one-based indexing
+        self._ja = (upper.indices + 1).astype(np.int32)
+        self._pt = np.zeros(64, dtype=_PT)                  # PARDISO's internal handle
+        self._perm = np.zeros(0, dtype=np.int32)
+        self.iparm = ip = np.zeros(64, dtype=np.int32)
+        self._schur_factor = None       # (Cholesky factor of S, lower) when schur rows are given
+        self._schur_inverse = None
+        has_schur = schur is not None and len(schur) > 0
+        if mkl_defaults and has_schur:
+            raise ValueError("a Schur complement needs the explicit settings (mkl_defaults=False)")
+        if not mkl_defaults:
+            ip[0] = 1       # iparm given explicitly
+            ip[1] = 2       # METIS nested dissection (parallel METIS, 3, is no faster on 2 cores)
+            ip[7] = 0       # no PARDISO refinement unless pivots were perturbed
+            ip[9] = 8       # pivot perturbation 1e-8 (mtype -2 default)
+            ip[17] = -1     # report nnz(L) in iparm[17]
+            ip[20] = 1      # Bunch-Kaufman pivoting (mtype -2 default)
+            # (two-level factorisation, iparm[23] = 1, is about 9 % faster on 2 cores, but its
+            # last digits depend on the thread count: a Dask task's run would differ from serial)
+        self._live = True
+        if not has_schur:
+            self._phase(12, np.zeros((self.n, 1), order="F"), np.zeros((self.n, 1), order="F"), 1)
+        else:
+            ip[35] = 2                                      # Schur complement + partial factorisation
+            self._perm = np.zeros(self.n, dtype=np.int32)
+            self._perm[schur] = 1
+            self._rows = np.asarray(schur)
+            S = np.zeros((len(schur), len(schur)), order="F")     # symmetric: either order
+            self._phase(11, np.zeros(1), np.zeros(1), 1)
+            self._phase(22, np.zeros(1), S, 1)
+            with dense_threads(len(S)):
+                self._schur_factor = sla.cho_factor(S, lower=True, overwrite_a=True)
+        self.nnz_factor = int(ip[17])
+
+    def _phase(self, phase, b, x, nrhs):
+        err = ctypes.c_int32(0)
+        self._call(self._pt.ctypes.data_as(ctypes.POINTER(_PT)), ctypes.byref(ctypes.c_int32(1)),
+                   ctypes.byref(ctypes.c_int32(1)), ctypes.byref(ctypes.c_int32(-2)),
+                   ctypes.byref(ctypes.c_int32(phase)), ctypes.byref(ctypes.c_int32(self.n)),
+                   self._data.ctypes.data_as(_F64), self._ia.ctypes.data_as(_I32), self._ja.ctypes.data_as(_I32),
+                   self._perm.ctypes.data_as(_I32), ctypes.byref(ctypes.c_int32(nrhs)),
+                   self.iparm.ctypes.data_as(_I32), ctypes.byref(ctypes.c_int32(0)),
+                   b.ctypes.data_as(_F64), x.ctypes.data_as(_F64), ctypes.byref(err))
+        if err.value != 0:
+            raise self._error(err.value)
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        """x (n,) or (n, k) with A x = b; b (n,) or (n, k) (not modified)."""
+        b = np.asfortranarray(b, dtype=np.float64)
+        x = np.zeros_like(b, order="F")
+        if not x.size:                                  # PARDISO rejects nrhs = 0
+            return x
+        nrhs = 1 if b.ndim == 1 else b.shape[1]
+        if self._schur_factor is None:
+            self._phase(33, b, x, nrhs)
+            return x
+        y = np.zeros_like(b, order="F")
+        self._phase(331, b, y, nrhs)
+        with dense_threads(len(self._rows)):
+            y[self._rows] = sla.cho_solve(self._schur_factor, y[self._rows])
+        self._phase(333, y, x, nrhs)
+        return x
+
+    def solve_schur(self, b_schur: np.ndarray) -> np.ndarray:
+        """x (n, q) with A x = b for a b (n, q) that is zero outside the Schur rows, given by its
+        values there b_schur (k, q). No forward substitution: with the interior of b zero, phase
+        331 leaves zeros in the interior and b unchanged in the Schur rows, so the Schur part of x
+        is S^-1 b_schur (from S^-1 when `schur_inverse` has been computed, else the Cholesky
+        factor of S) and the interior one backward substitution (phase 333)."""
+        if self._schur_factor is None:
+            raise ValueError("this factorisation has no Schur complement")
+        b_schur = np.asarray(b_schur, dtype=np.float64).reshape(len(self._rows), -1)
+        y = np.zeros((self.n, b_schur.shape[1]), order="F")
+        if not y.size:
+            return y
+        with dense_threads(len(self._rows)):
+            y[self._rows] = (self._schur_inverse @ b_schur if self._schur_inverse is not None
+                             else sla.cho_solve(self._schur_factor, b_schur))
+        x = np.zeros_like(y, order="F")
+        self._phase(333, y, x, y.shape[1])
+        return x
+
+    @property
+    def schur(self) -> np.ndarray:
+        """(k,) the Schur rows (empty without them)."""
+        return self._rows if self._schur_factor is not None else np.zeros(0, dtype=int)
+
+    def schur_inverse(self) -> np.ndarray:
+        """(k, k) read-only S^-1, the Schur rows' block of A^-1 (LAPACK potri on the Cholesky
+        factor of S, k^3 flops; computed once)."""
+        if self._schur_factor is None:
+            raise ValueError("this factorisation has no Schur complement")
+        if self._schur_inverse is None:
+            with dense_threads(len(self._rows)):
+                c, info = sla.lapack.dpotri(self._schur_factor[0], lower=1)
+            if info:
+                raise np.linalg.LinAlgError(f"potri failed ({info})")
+            for a in range(0, len(c), 1024):            # mirror the lower triangle, in blocks
+                b = min(a + 1024, len(c))
+                c[a:b, b:] = c[b:, a:b].T
+                d = c[a:b, a:b]
+                d[:] = np.tril(d) + np.tril(d, -1).T
+            c.flags.writeable = False
+            self._schur_inverse = c
+        return self._schur_inverse
+
+    def release(self) -> None:
+        """Free PARDISO's memory for this factorisation (later solves fail)."""
+        if self._live:
+            self._live = False
+            self._phase(-1, np.zeros(1), np.zeros(1), 1)
+
+    def __del__(self):
+        try:
+            self.release()
+        except Exception:  # noqa: BLE001  (interpreter shutdown, failed factorisation)
+            pass
+
+
+def solve_refined(A: sp.spmatrix, b: np.ndarray) -> np.ndarray:
+    """x (n,) with A x = b for a sparse symmetric (indefinite) A (n, n) and b (n,): one solve
+    plus one step of iterative refinement, x + A^-1 (b - A x). PARDISO with its default settings
+    (LDL^T of the upper triangle), factorised and released here; SciPy SuperLU without pypardiso.
+    The refinement step matters for layers 1e5 apart in stiffness: without it the solve's error
+    floors a Newton iteration's residual at ~1e-7 of the reactions."""
+    A = A.tocsr()
+    if not _pardiso_available(stacklevel=2):
+        from scipy.sparse.linalg import splu
+
+        lu = splu(A.tocsc())
+        x = lu.solve(b)
+        return x + lu.solve(b - A @ x)
+    factor = Pardiso(sp.triu(A, format="csr"), mkl_defaults=True)
+    try:
+        x = factor.solve(b)
+        return x + factor.solve(b - A @ x)
+    finally:
+        factor.release()
+
+
+# --------------------------------------------------------------------------- saddle system
+ROUND_OFF = 1e-12
+
+
+def drop_round_off(upper: sp.csr_matrix, rtol: float = ROUND_OFF) -> sp.csr_matrix:
+    """The upper triangle (CSR) of a symmetric matrix without its off-diagonal entries below
+    rtol * sqrt(|a_ii a_jj|): explicit zeros, and sums that cancel to round-off, whose presence
+    depends on the order of summation (a rotation's sparse product keeps 1e-17 and drops 0.0).
+
+    The ordering PARDISO's METIS finds depends on the pattern, and its fill is sensitive to it:
+    on the human 0.5 mm first run (13.8 M entries, 22,500 of them below 1e-14 of the diagonal
+    scale and none between 1e-14 and 1e-12), patterns differing only in such entries gave
+    factorisations of 1,077 to 1,374 GFlop; without them, 1,059. The pattern, and so the ordering
+    and the factorisation's cost, then no longer depend on the order of summation (they still
+    depend on which layers share a modulus: a sum over two layers' elements cancels only when
+    their moduli are equal). The matrix changes by at most rtol of its diagonal scale; residuals
+    are still checked against the exact matrix."""
+    upper = upper.tocsr(copy=True)
+    d = np.sqrt(np.abs(upper.diagonal()))
+    rows = np.repeat(np.arange(upper.shape[0], dtype=upper.indices.dtype), np.diff(upper.indptr))
+    scale = d[rows]                     # in place from here: fresh temporaries of the matrix's size
+    scale *= d[upper.indices]           # cost page faults (5x the time on the human 0.5 mm matrix)
+    scale *= rtol
+    small = np.abs(upper.data) <= scale
+    small &= rows != upper.indices
+    upper.data[small] = 0.0
+    upper.eliminate_zeros()
+    return upper
+
+
+class SaddleFactor:
+    """K = Kdev + B^T D^-1 B (n, n) factorised once and reused for many right-hand sides.
+
+    Kdev (n, n) sparse symmetric positive semi-definite, B (m, n) sparse, D (m,) positive. K is
+    much denser than its parts (each row of B couples a patch of unknowns), so the sparse
+    symmetric quasi-definite matrix [[Kdev, B^T], [B, -D]] is factorised instead (LDL^T, PARDISO
+    mtype -2); its solution's first n rows solve K x = b exactly. (Measured on a 71k-DOF sphere:
+    a Cholesky factorisation of K itself has 4.5x the factor non-zeros and 13x the flops.)
+
+    Each solve checks ||K x - b|| / ||b|| per column and, only for columns above the refinement
+    tolerance (REFINE_TOL at first), runs up to MAX_REFINE steps of iterative refinement on K. A
+    step that gains less than 10x ends the refinement and raises this factor's tolerance to 10x
+    the residual reached, so later solves skip refinement that does not help (round-off limited
+    systems, e.g. layers with moduli 1e4 apart).
+
+    condensed: optional sorted (k,) indices into the n unknowns whose compliance block (K^-1
+    restricted to them, `compliance_block`) is wanted: PARDISO then returns the Schur complement
+    onto them with the factorisation (see `Pardiso`); the SciPy fallback ignores it.
+    rotation: optional sparse orthogonal T (n, n), x = T x_local: the system is factorised in the
+    local unknowns (T^T K T) and `condensed` indexes those; solves and residuals stay global.
+    free: optional sorted (n,) indices: K is the restriction of Kdev (N, N) and B (m, N) to these
+    rows and columns (a model's unconstrained DOFs). Kdev and B are then referenced, not copied:
+    the restricted copies exist only while the factorised matrix is built (on the human 0.5 mm
+    model they would hold 0.3 GB through the factorisation and every later solve), and residuals
+    multiply by the whole matrices.
+    A singular matrix raises InputError.
+    """
+
+    REFINE_TOL = 1e-10
+    MAX_REFINE = 2
+
+    def __init__(self, Kdev: sp.csr_matrix, B: sp.csr_matrix, D: np.ndarray, condensed=None, rotation=None,
+                 free=None):
+        self.Kdev, self.B, self.D = Kdev, B, D
+        self._free = None if free is None else np.asarray(free)
+        self.n = Kdev.shape[0] if free is None else len(self._free)
+        if free is not None:
+            Kdev, B = Kdev[self._free][:, self._free], B[:, self._free]
+        self.refinements = 0        # refinement steps taken by the last call
+        self.refine_tol = self.REFINE_TOL
+        self.condensed = np.zeros(0, dtype=int)
+        self._pardiso = None
+        self._T = None if rotation is None else sp.csr_matrix(rotation)
+        if self._T is not None:
+            Kdev, B = (self._T.T @ Kdev @ self._T).tocsr(), (B @ self._T).tocsr()
+        if not _pardiso_available(stacklevel=3):
+            from scipy.sparse.linalg import splu
+
+            A = sp.bmat([[Kdev, B.T], [B, -sp.diags(D)]], format="csc")
+            self.backend, self._solve = "scipy-splu", splu(A).solve
+            return
+        from pypardiso.pardiso_wrapper import PyPardisoError
+
+        # symmetric types read the upper triangle, built without the full matrix (half the
+        # memory and time of triu(bmat(...)); the local blocks are freed before the factorisation)
+        upper = drop_round_off(sp.bmat([[sp.triu(Kdev), B.T], [None, -sp.diags(D)]], format="csr"))
+        del Kdev, B
+        try:
+            self._pardiso = Pardiso(upper, condensed)
+        except (PyPardisoError, np.linalg.LinAlgError) as exc:
+            raise InputError(f"the stiffness matrix is singular ({exc}); check that every part of the "
+                             "mesh is held") from None
+        self.backend, self._solve = "pardiso", self._pardiso.solve
+        self.condensed = self._pardiso.schur
+
+    @property
+    def nnz_factor(self) -> float:
+        """Non-zeros of PARDISO's factor (NaN with the SciPy fallback)."""
+        return float("nan") if self._pardiso is None else float(self._pardiso.nnz_factor)
+
+    def compliance_block(self) -> np.ndarray:
+        """(k, k) read-only K^-1 restricted to the `condensed` unknowns: the inverse of their
+        Schur complement (computed once)."""
+        return self._pardiso.schur_inverse()
+
+    def apply(self, x: np.ndarray) -> np.ndarray:
+        """K x (x (n,) or (n, k))."""
+        if self._free is not None:
+            whole = np.zeros((self.Kdev.shape[0],) + x.shape[1:])
+            whole[self._free] = x
+            x = whole
+        Bx = self.B @ x
+        Kx = self.Kdev @ x + self.B.T @ (Bx / (self.D if x.ndim == 1 else self.D[:, None]))
+        return Kx if self._free is None else Kx[self._free]
+
+    def _raw(self, b: np.ndarray) -> np.ndarray:
+        rhs = np.zeros((len(b) + len(self.D),) + b.shape[1:], order="F")
+        rhs[:len(b)] = b if self._T is None else self._T.T @ b
+        x = self._solve(rhs)[:len(b)]
+        return x if self._T is None else self._T @ x
+
+    def _relres(self, x, b):
+        r = b - self.apply(x)
+        nr, nb = np.linalg.norm(r, axis=0), np.linalg.norm(b, axis=0)
+        return r, np.where(nb > 0, nr / np.where(nb > 0, nb, 1.0), nr)
+
+    def __call__(self, b: np.ndarray) -> np.ndarray:
+        """x with K x = b (b (n,) or (n, k)); sets `last_residual` (max relative residual)."""
+        b = np.asarray(b, dtype=float)
+        return self._refine(self._raw(b), b)
+
+    def solve_condensed(self, cols, check: bool = True) -> np.ndarray:
+        """x (n, q) with K x = e for unit loads on the `condensed` unknowns `condensed[cols]`
+        (cols (q,) positions in `condensed`; with a rotation, unit loads along the local axis of
+        those unknowns): no forward substitution (`Pardiso.solve_schur`).
+        check: compute the residual and refine as `__call__` does (sets `last_residual`);
+        False: neither (`last_residual` NaN). Raises ValueError when nothing is condensed."""
+        cols = np.asarray(cols, int)
+        if self._pardiso is None or not len(self.condensed):
+            raise ValueError("nothing is condensed in this factorisation")
+        e = np.zeros((len(self.condensed), len(cols)))
+        e[cols, np.arange(len(cols))] = 1.0
+        x = self._pardiso.solve_schur(e)[:self.n]
+        if self._T is not None:
+            x = self._T @ x
+        if not check:
+            self.refinements, self.last_residual = 0, float("nan")
+            return x
+        b = sp.csc_matrix((np.ones(len(cols)), (self.condensed[cols], np.arange(len(cols)))),
+                          shape=(self.n, len(cols)))
+        b = (b if self._T is None else self._T @ b).toarray()
+        return self._refine(x, b)
+
+    def _refine(self, x: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """x after the residual check and refinement of the class docstring; sets `refinements`
+        and `last_residual`."""
+        r, rel = self._relres(x, b)
+        self.refinements = 0
+        while self.refinements < self.MAX_REFINE and rel.max(initial=0.0) > self.refine_tol:
+            if x.ndim == 1:
+                x = x + self._raw(r)
+                r, new = self._relres(x, b)
+            else:
+                cols = np.flatnonzero(rel > self.refine_tol)
+                x[:, cols] += self._raw(r[:, cols])
+                rc, nc = self._relres(x[:, cols], b[:, cols])
+                r[:, cols] = rc
+                new = rel.copy()
+                new[cols] = nc
+            self.refinements += 1
+            gained = rel.max() / max(new.max(), 1e-300)
+            rel = new
+            if gained < 10:
+                self.refine_tol = max(self.refine_tol, 10 * float(rel.max()))
+                break
+        self.last_residual = float(rel.max(initial=0.0))
+        return x
+
+    def residual(self, x, b) -> float:
+        """max over columns of ||K x - b|| / ||b||."""
+        return float(self._relres(x, b)[1].max(initial=0.0))

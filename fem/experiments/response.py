@@ -1,0 +1,358 @@
+"""Persisted response models: what a model answers to contact forces on its pad, stored in the
+model folder and reused by every later command with the same inputs.
+
+A response model belongs to one (mesh, material and nu, held regions, approach direction, receptor
+grid). Over the m contact candidates of the model's contact region (`fem.io.modelfolder.CONTACT_REGION`),
+k of which are condensed (`reach`: all when m <= CONDENSE_MAX_NODES, else the ones a scene's
+indentors can touch), it holds one row per condensed candidate j, the response to a unit force
+along the approach at j:
+
+- WT (k, m) [mm/N]: the displacement along the approach of every candidate; its `reach` columns
+  are the compliance C (k, k) of the condensed ones, from the Schur complement of the
+  factorisation (no solves), the other columns from solves;
+- RT (k, r): the receptor sampler's inputs (displacement, strain [-], stress [MPa] at the receptor
+  points, `ReceptorSampler.operator` rows), R = O K^-1 B transposed: the loads of B sit on
+  condensed rows, so each block of 64 candidates is one backward substitution
+  (`fem.core.system.LinearSystem.solve_condensed`); through the transposed system
+  B^T K^-1 O^T (full solves) when O has fewer rows than there are condensed candidates.
+
+Rows are contiguous on disk, so a contact problem reads only the rows of the candidates that
+carry force (`StoredCompliance` keeps each row it has read). A contact problem, its deflections
+and its receptor measures need no factorisation: the contact model of `contact_model` gives the
+forces, deflections and observations of the factorised path (`fem.contact.linear.ContactModel.from_fe`)
+to round-off. Full displacement fields (a PVD) do need it.
+
+    store = ResponseStore("out/cyl8")                      # <model>/response/<key>/
+    key = response_key(model, approach, grid, store.mesh_sha256())
+    rm = store.load(key) or store.save(build_response(model, approach, ReceptorSampler(model, grid), key))
+    cm = contact_model(model, sn, {approach_key(approach): rm})   # fem.contact.linear.ContactModel
+    responses, sampler, used = stored_responses(store, model, approaches, grid, touched)   # all of it
+
+Files (docs/file-formats.md): WT.npy, RT.npy (float64, memory-mapped when read), reach.npy
+(m,) bool, shift_mm.npy and response.json (format, key, approach, shapes, receptor shifts, build
+seconds).
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+import time
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse as sp
+
+from fingertip.progress import as_progress
+from fingertip.staging import staged_output, write_json
+from fem.contact.compliance import Compliance, DenseReach, RowCache
+from fem.contact.linear import ContactModel, fe_facets
+from fem.io.modelfolder import CONDENSE_MAX_NODES, CONTACT_REGION, HELD, held_regions
+
+RESPONSE_FORMAT = 2
+"""Version of the stored layout and of what the key covers (raise it when either changes)."""
+BLOCK = 64
+"""Right-hand sides per solve when R and W are built."""
+
+
+# --------------------------------------------------------------------------- key
+def mesh_sha256(model_dir) -> str:
+    """sha256 of a model folder's mesh.vtu bytes."""
+    h = hashlib.sha256()
+    with open(Path(model_dir) / "mesh.vtu", "rb") as fh:
+        for chunk in iter(lambda: fh.read(1 << 22), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def approach_key(approach) -> tuple:
+    """The approach (3,) rounded to 9 decimals: the same direction gives the same tuple."""
+    a = np.asarray(approach, float)
+    return tuple(float(v) for v in np.round(a / np.linalg.norm(a), 9) + 0.0)
+
+
+def response_key(model, approach, grid, mesh_sha: str) -> str:
+    """sha256 of everything a response model depends on: the mesh bytes (`mesh_sha256`), the
+    material (code, moduli, nu per layer, rigid layers), the held regions, the approach (rounded,
+    `approach_key`) and the receptor grid (points, depths, sites)."""
+    mat = model.material
+    spec = {"format": RESPONSE_FORMAT, "mesh": mesh_sha, "material": mat.code,
+            "E_MPa": sorted((int(k), float(v)) for k, v in mat.E_MPa.items()),
+            "nu": sorted((int(k), float(v)) for k, v in mat.nu.items()),
+            "rigid": sorted(int(k) for k in mat.rigid),
+            "held": repr(sorted((k, repr(v)) for k, v in HELD[model.dim].items() if k in model.regions)),
+            "region": CONTACT_REGION[model.dim], "approach": approach_key(approach)}
+    h = hashlib.sha256(json.dumps(spec, sort_keys=True).encode())
+    for a in (np.round(grid.points_mm, 9) + 0.0, np.asarray(grid.depth_mm, float), np.asarray(grid.site, np.int64)):
+        h.update(np.ascontiguousarray(a).tobytes())
+    return h.hexdigest()
+
+
+# --------------------------------------------------------------------------- the model
+@dataclass
+class ResponseModel:
+    """WT (k, m) mm/N and RT (k, r) per N, one row per condensed candidate (module docstring),
+    reach (m,) bool (k True), approach (3,), receptor shifts shift_mm (n,)
+    (`ReceptorSampler.shift_mm`), its key, build seconds and bytes on disk."""
+    key: str
+    approach: np.ndarray
+    reach: np.ndarray
+    WT: np.ndarray
+    RT: np.ndarray
+    shift_mm: np.ndarray
+    build_seconds: float = float("nan")
+    nbytes: int = 0
+
+    def covers(self, candidates) -> bool:
+        """Whether every candidate of the (m,) bool mask is condensed."""
+        return len(candidates) == len(self.reach) and not np.any(np.asarray(candidates) & ~self.reach)
+
+
+def build_response(model, approach, sampler, key: str, candidates=None, progress=None) -> ResponseModel:
+    """The response model of a `fem.io.modelfolder.read_model` model along the unit `approach` (3,)
+    for a `fem.receptors.grid.ReceptorSampler`: factorised held as `HELD` says with the condensed
+    candidates (candidates: (m,) bool over the contact region's nodes, default all of them when
+    there are at most CONDENSE_MAX_NODES) condensed along the approach. progress: optional
+    `fingertip.progress` object (None: silent)."""
+    t0 = time.perf_counter()
+    sn = model.surface_nodes(CONTACT_REGION[model.dim])
+    m = len(sn.nodes)
+    candidates = np.ones(m, bool) if candidates is None else np.asarray(candidates, bool)
+    if candidates.sum() > CONDENSE_MAX_NODES:
+        raise ValueError(f"{int(candidates.sum())} contact candidates to condense: at most {CONDENSE_MAX_NODES}")
+    a = np.asarray(approach, float)
+    a = a / np.linalg.norm(a)
+    if model.dim == 2 and abs(a[2]) > 1e-12:
+        raise ValueError("a 2D model is indented within its x-y plane: the approach needs z = 0")
+    progress = as_progress(progress)
+    with progress.task(f"response model: factorising {model.ndof} DOFs with {int(candidates.sum())} contact "
+                       f"candidates condensed", kind=f"factorise-{model.dim}d",
+                       size=model.ndof + 3 * int(candidates.sum())):
+        system = model.system(held_regions(model), condense=(sn.nodes[candidates], a))
+    reach = system.stored(sn.nodes, a)
+    k = int(reach.sum())
+    B = sp.csc_matrix((np.tile(a[:model.dim], m), (sn.dofs.ravel(), np.repeat(np.arange(m), model.dim))),
+                      shape=(model.ndof, m))
+    O = sp.vstack([B[:, ~reach].T, sampler.operator]).tocsr()         # rows still to solve for
+    with progress.task(f"response model: {min(k, O.shape[0])} solves for {O.shape[0] - (m - k)} receptor "
+                       f"values and {m - k} other candidates"):
+        if k <= O.shape[0]:                          # O K^-1 B: k loads on condensed unknowns
+            out = _apply_condensed(system, sn.nodes[reach], a, O)
+        else:                                        # B^T K^-1 O^T: one solve per row of O
+            out = _apply_inverse(system, O.T.tocsc(), B[:, reach].T.tocsr())
+    WT = np.empty((k, m))
+    WT[:, reach] = system.compliance(sn.nodes[reach], a)            # symmetric: rows are columns
+    WT[:, ~reach] = out[:, :m - k]
+    return ResponseModel(key, a, reach, WT, out[:, m - k:], np.asarray(sampler.shift_mm, float),
+                         time.perf_counter() - t0)
+
+
+def _apply_inverse(system, loads, observe) -> np.ndarray:
+    """(p, q) observe (p, ndof) K^-1 loads (ndof, q) with a `fem.core.system.LinearSystem`, BLOCK
+    columns per solve."""
+    loads = sp.csc_matrix(loads)
+    out = np.empty((observe.shape[0], loads.shape[1]))
+    for s in range(0, loads.shape[1], BLOCK):
+        u = system.solve(np.asfortranarray(loads[:, s:s + BLOCK].toarray()))
+        out[:, s:s + BLOCK] = observe @ u
+    return out
+
+
+def _apply_condensed(system, nodes, a, observe) -> np.ndarray:
+    """(k, p) (observe (p, ndof) K^-1 B)^T for unit loads along `a` at the condensed `nodes` (k,),
+    BLOCK of them per backward substitution (`LinearSystem.solve_condensed`). The first block's
+    residual is checked (and refined as `fem.core.linalg.SaddleFactor` does); later blocks only while
+    refinement steps gained accuracy: the loads are all of one kind on one factorisation, so a
+    block that needed none (or where refinement stopped helping) speaks for the rest."""
+    out = np.empty((len(nodes), observe.shape[0]))
+    check = True
+    for s in range(0, len(nodes), BLOCK):
+        out[s:s + BLOCK] = (observe @ system.solve_condensed(nodes[s:s + BLOCK], a, check=check)).T
+        check = check and system.refined
+    return out
+
+
+# --------------------------------------------------------------------------- storage
+class ResponseStore:
+    """The response models of one model folder: `<model>/response/<key>/` with WT.npy, RT.npy,
+    reach.npy, shift_mm.npy and response.json; written atomically, read memory-mapped."""
+
+    FILES = ("WT.npy", "RT.npy", "reach.npy", "shift_mm.npy")
+
+    def __init__(self, model_dir):
+        self.folder = Path(model_dir) / "response"
+        self._mesh_sha = self._memo = None
+
+    def mesh_sha256(self) -> str:
+        """`mesh_sha256` of the model folder, computed once and remembered in `response/mesh.json`
+        with the file's size, inode and modification time: while those are unchanged the mesh is
+        not read again (`pipeline.py mesh` writes a new file, so a new mesh has a new inode)."""
+        if self._mesh_sha is None:
+            st = (self.folder.parent / "mesh.vtu").stat()
+            stamp = [st.st_size, st.st_ino, st.st_mtime_ns]
+            memo = self.folder / "mesh.json"
+            try:
+                known = json.loads(memo.read_text())
+                if known["stamp"] == stamp:
+                    self._mesh_sha = str(known["sha256"])
+            except (OSError, ValueError, KeyError, TypeError):
+                pass
+            if self._mesh_sha is None:
+                self._mesh_sha = mesh_sha256(self.folder.parent)
+                self._memo = {"stamp": stamp, "sha256": self._mesh_sha}
+                self._remember()
+        return self._mesh_sha
+
+    def _remember(self) -> None:
+        """Write `response/mesh.json` (see `mesh_sha256`) once the folder exists."""
+        if self._memo is not None and self.folder.is_dir():
+            try:
+                write_json(self.folder / "mesh.json", self._memo)
+                self._memo = None
+            except OSError:
+                pass                        # a read-only folder: the mesh is hashed again next time
+
+    def path(self, key: str) -> Path:
+        return self.folder / key
+
+    def load(self, key: str) -> ResponseModel | None:
+        """The stored model of `key`, memory-mapped; None when there is none. A folder that does
+        not read back as written (missing or truncated file, other shapes) is removed with a
+        warning, so the caller rebuilds it."""
+        folder = self.path(key)
+        if not folder.is_dir():
+            return None
+        try:
+            meta = json.loads((folder / "response.json").read_text())
+            WT, RT, reach, shift = (np.load(folder / f, mmap_mode="r") for f in self.FILES)
+            k, m = meta["shape_WT"]
+            ok = (meta["format"] == RESPONSE_FORMAT and meta["key"] == key and WT.shape == (k, m)
+                  and WT.dtype == RT.dtype == np.float64 and list(RT.shape) == meta["shape_RT"] and RT.shape[0] == k
+                  and reach.shape == (m,) and reach.dtype == bool and int(reach.sum()) == k
+                  and shift.shape == (meta["receptor_points"],))
+            if not ok:
+                raise ValueError("shapes or key differ from response.json")
+        except (OSError, ValueError, KeyError, TypeError, EOFError) as exc:
+            warnings.warn(f"stored response model {folder} is unreadable ({exc}): removed, it will be rebuilt",
+                          stacklevel=2)
+            shutil.rmtree(folder, ignore_errors=True)
+            return None
+        return ResponseModel(key, np.asarray(meta["approach"], float), np.asarray(reach), WT, RT,
+                             np.asarray(shift), float(meta["build_seconds"]), int(meta["bytes"]))
+
+    def save(self, rm: ResponseModel) -> ResponseModel:
+        """Write `rm` atomically (a staged folder renamed into place); returns it with `nbytes` set."""
+        target = self.path(rm.key)
+        with staged_output(target) as tmp:
+            for name, arr in zip(self.FILES, (rm.WT, rm.RT, rm.reach, rm.shift_mm)):
+                np.save(tmp / name, arr)                # RT may be a view: written without a copy
+            rm.nbytes = sum((tmp / f).stat().st_size for f in self.FILES)
+            write_json(tmp / "response.json", {
+                "format": RESPONSE_FORMAT, "key": rm.key, "approach": np.asarray(rm.approach).tolist(),
+                "shape_WT": list(rm.WT.shape), "shape_RT": list(rm.RT.shape),
+                "receptor_points": len(rm.shift_mm), "build_seconds": rm.build_seconds, "bytes": rm.nbytes})
+        self._remember()
+        return rm
+
+
+# --------------------------------------------------------------------------- contact
+class StoredCompliance(DenseReach, Compliance):
+    """The compliance and observed response of a `ResponseModel`: the same interface as
+    `fem.contact.compliance.CondensedCompliance` (NaN compliance rows outside `reach`, deflections of
+    those candidates with the observation), answered by matrix products, no solves. Only the
+    rows of candidates a contact problem touches are read from the (memory-mapped) model, each
+    once."""
+
+    def __init__(self, rm: ResponseModel):
+        k, m = rm.WT.shape
+        super().__init__(m, rm.RT.shape[1])
+        self._WT, self._RT = rm.WT, rm.RT
+        self._read = RowCache(lambda i: self._WT[i], k, m)          # rows of WT read so far
+        self._dense(rm.reach, rm.WT[np.arange(k), np.flatnonzero(rm.reach)])
+
+    def _rows(self, rows) -> np.ndarray:
+        slots = self._read.slots(rows)
+        w = self._read.data[slots]
+        return w if self.reach.all() else w[:, self.reach]
+
+    def block(self, rows, cols) -> np.ndarray:
+        """(len(rows), len(cols)) compliance between candidates (WT's columns are all m of them):
+        only those entries are gathered."""
+        slots = self._read.slots(self._row[np.asarray(cols, int)])
+        return self._read.data[np.ix_(slots, np.asarray(rows, int))].T
+
+    def observed(self, idx) -> np.ndarray:
+        return np.asarray(self._RT[self._row[np.asarray(idx, int)]]).T
+
+    def response(self, force_N) -> tuple[np.ndarray, np.ndarray]:
+        """((m, k) deflections of every candidate along the approach, (r, k) observed response) to
+        nodal contact forces (m, k): the rows of the candidates that carry force only."""
+        F = np.asarray(force_N, float).reshape(self.m, -1)[self.reach]
+        act = np.flatnonzero(np.any(F != 0, axis=1))
+        slots = self._read.slots(act)
+        return self._read.data[slots].T @ F[act], np.asarray(self._RT[act]).T @ F[act]
+
+    def observe(self, force_N) -> np.ndarray:
+        """(r,) or (r, k) observed response to nodal contact forces (m,) or (m, k)."""
+        return self.response(force_N)[1].reshape((self.r,) + np.shape(force_N)[1:])
+
+    def displacement(self, force_N):
+        raise ValueError("a stored response model has no full displacement field: factorise the model")
+
+
+def contact_model(model, sn, responses: dict) -> ContactModel:
+    """ContactModel on the contact region's candidates `sn` of a model (the candidates, areas and
+    facets of `ContactModel.from_fe`) answered by stored response models {approach_key: model}."""
+    def compliance_for(a):
+        rm = responses.get(approach_key(a))
+        if rm is None:
+            raise ValueError(f"no response model along {np.round(a, 6).tolist()}")
+        return StoredCompliance(rm)
+    return ContactModel(sn.x, sn.area, compliance_for, facets=fe_facets(model, CONTACT_REGION[model.dim], sn))
+
+
+def stored_responses(store: ResponseStore, model, approaches, grid, touched, progress=None):
+    """({approach_key: ResponseModel}, ReceptorSampler, [(key, "stored" or "built", seconds, bytes)])
+    for the approaches (each (3,)) of a scene on a `read_model` model with receptor grid `grid`:
+    each read from `store` when stored and its condensed candidates cover `touched` ((m,) bool,
+    e.g. `fem.contact.linear.reach` of the scene, or all candidates), else built with the touched
+    candidates and those stored before condensed (the touched ones alone when together they
+    exceed CONDENSE_MAX_NODES) and stored. The build time grows with the condensed candidates
+    (one solve each), so a scene condenses what it can touch and `pipeline.py prepare` all.
+    A store that cannot be written is warned about; the models built are used all the same.
+    The sampler has an operator only when something was built."""
+    from fem.receptors.grid import ReceptorSampler
+
+    progress = as_progress(progress)
+    out, used, sampler, mesh_sha = {}, [], None, store.mesh_sha256()
+    for a in approaches:
+        ak = approach_key(a)
+        if ak in out:
+            continue
+        key = response_key(model, a, grid, mesh_sha)
+        rm = store.load(key)
+        if rm is None or not rm.covers(touched):
+            candidates = touched | (rm.reach if rm is not None else False)
+            if candidates.sum() > CONDENSE_MAX_NODES:
+                candidates = touched
+            if sampler is None:
+                with progress.task(f"receptor operators at {len(grid.points_mm)} points",
+                                   kind=f"sampler-{model.dim}d", size=len(grid.points_mm)):
+                    sampler = ReceptorSampler(model, grid)
+            rm = build_response(model, a, sampler, key, candidates, progress)
+            try:
+                store.save(rm)
+            except OSError as exc:
+                warnings.warn(f"cannot store the response model in {store.folder} ({exc}): the next run "
+                              f"factorises again", stacklevel=2)
+            used.append((key, "built", rm.build_seconds, rm.nbytes))
+        else:
+            used.append((key, "stored", rm.build_seconds, rm.nbytes))
+        progress.note(f"response model: {used[-1][1]} {key[:12]} ({rm.nbytes / 2**20:.1f} MB, "
+                      f"{rm.WT.shape[0]} condensed candidates, built in {rm.build_seconds:.2f} s)")
+        out[ak] = rm
+    if sampler is None:
+        sampler = ReceptorSampler.without_operator(model.dim, grid, next(iter(out.values())).shift_mm)
+    return out, sampler, used

@@ -1,0 +1,459 @@
+"""The scene: indentation experiments on one model folder, as a TOML file or command-line flags.
+
+    material = "m43338"                  # optional: material code or [E1, E2, ...] MPa (default: the model's)
+    nu = 0.48                            # optional: Poisson ratio (default: the model's)
+    [receptors]                          # optional
+    depths_mm = [0.5, 0.75, 1.0]         # or "0.5:1:0.25", "0.5,1", 0.75
+    spacing_mm = 1.0
+    line = ["z", "middle"]               # receptors on a line only: [axis, mm or "middle"]
+    measures = ["sed_MPa", ...]          # fem.core.measures names
+    [output]                             # optional
+    pvd = true                           # full fields per indentation (default: up to 20 of them)
+    plots = true
+    [[experiment]]                       # one or more
+    name = "C5"
+    indentor = "C5"                      # fem.contact.indentors code
+    orientation = "parallel"             # or "perpendicular", or an angle in degrees
+    position_mm = [0.0, 5.0]             # [x, z], [x, y, z] or "top"
+    incline_deg = -30                    # or approach = [0, -1, 0]; default: the model's support
+    depth_mm = "0.5:3:0.5"               # or force_N = 0.02 (+ equal_force, max_depth_mm)
+    sweep = "x=-3:3:0.1"                 # optional: move the indentor along x or z (mm)
+    [experiment.trace]                   # optional: a time course of the depth (or force)
+    shape = "ramp_hold"                  # ramp_hold, sine, steps, table, scan (fem.experiments.traces)
+    ramp_s = 0.1
+    hold_s = 0.5
+    release_s = 0.1
+    samples = 100
+    [afferents]                          # optional, with traced experiments: spiking afferents
+    classes = ["SA1", "RA"]              # fem.receptors.transduction classes
+    seed = 0
+
+Every key is declared once, below, with its type, unit and default (`Scene`, `Receptors`,
+`Output`, `Experiment`); unknown keys and wrong types are one-line InputErrors.
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from fingertip.errors import InputError
+from fem.contact.linear import MAX_DEPTH_MM
+from fem.contact.indentors import orientation_deg, shapes_for
+from fem.core.materials import Material
+from fem.core.measures import check_names
+from fem.receptors.grid import DEFAULT_DEPTHS_MM, DEFAULT_MEASURES
+
+AXES = {"x": 0, "y": 1, "z": 2}
+
+
+# --------------------------------------------------------------------------- value lists
+def parse_values(text) -> np.ndarray:
+    """'a:b:step' (inclusive), 'v1,v2,...', a number or a list -> (n,) floats."""
+    if isinstance(text, (int, float)):
+        return np.array([float(text)])
+    if isinstance(text, (list, tuple)):
+        return np.asarray(text, float)
+    try:
+        if ":" in text:
+            a, b, step = (float(t) for t in text.split(":"))
+            if not step > 0 or b < a:
+                raise ValueError
+            return a + step * np.arange(int(np.floor((b - a) / step + 1e-9)) + 1)
+        return np.array([float(t) for t in text.split(",")])
+    except ValueError:
+        raise InputError(f"bad value list '{text}': use start:stop:step (e.g. 0.5:3:0.5) or v1,v2,...") from None
+
+
+def parse_sweep(text) -> tuple[int, np.ndarray]:
+    """'x=-3:3:0.1' or 'z=...' -> (axis index, (k,) offsets in mm)."""
+    axis, eq, values = str(text).partition("=")
+    if not eq or axis.strip() not in ("x", "z"):
+        raise InputError(f"bad sweep '{text}': use x=start:stop:step or z=start:stop:step (mm)")
+    return {"x": 0, "z": 2}[axis.strip()], parse_values(values)
+
+
+# --------------------------------------------------------------------------- key types
+def _bad(key, where, want, value):
+    return InputError(f"{where} {key}: expected {want}, got {value!r}")
+
+
+def _number(value, key, where):
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise _bad(key, where, "a number", value)
+    return float(value)
+
+
+def _boolean(value, key, where):
+    if not isinstance(value, bool):
+        raise _bad(key, where, "true or false", value)
+    return value
+
+
+def _text(value, key, where):
+    if not isinstance(value, str):
+        raise _bad(key, where, "a string", value)
+    return value
+
+
+def _values(value, key, where):
+    if isinstance(value, bool) or not isinstance(value, (int, float, str, list, tuple)):
+        raise _bad(key, where, 'a number, a list or "start:stop:step"', value)
+    try:
+        return tuple(float(v) for v in parse_values(value))
+    except InputError:
+        raise
+    except (TypeError, ValueError):
+        raise _bad(key, where, "numbers", value) from None
+
+
+def _material(value, key, where):
+    """A material code ("m43338") or Young's moduli per layer [MPa] (a list, layers 1, 2, ...)."""
+    if isinstance(value, str):
+        return value
+    if (isinstance(value, (list, tuple)) and value
+            and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)):
+        return tuple(float(v) for v in value)
+    raise _bad(key, where, 'a material code ("m43338") or moduli per layer in MPa ([0.01, 0.001, ...])', value)
+
+
+def _count(value, key, where):
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise _bad(key, where, "a whole number", value)
+    return value
+
+
+def _densities(value, key, where):
+    if not isinstance(value, dict) or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                              for v in value.values()):
+        raise _bad(key, where, "a table of class = afferents per cm^2, e.g. {SA1 = 70, RA = 140}", value)
+    return tuple((str(k), float(v)) for k, v in value.items())
+
+
+def _names(value, key, where):
+    if not isinstance(value, (list, tuple)) or not all(isinstance(v, str) for v in value):
+        raise _bad(key, where, "a list of names", value)
+    return tuple(value)
+
+
+def _orientation(value, key, where):
+    if isinstance(value, bool) or not isinstance(value, (str, int, float)):
+        raise _bad(key, where, '"parallel", "perpendicular" or an angle in degrees', value)
+    return value
+
+
+def _position(value, key, where):
+    """[x, z] or [x, y, z] in mm (kept as given: run.json records them), or "top"."""
+    if isinstance(value, str):
+        if value != "top":
+            raise InputError(f'position_mm "{value}": give [x, z] in mm or "top"')
+        return value
+    if (not isinstance(value, (list, tuple)) or len(value) not in (2, 3)
+            or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)):
+        raise _bad(key, where, '[x, z] or [x, y, z] in mm, or "top"', value)
+    return tuple(value)
+
+
+def _vector3(value, key, where):
+    if (not isinstance(value, (list, tuple, np.ndarray)) or len(value) != 3
+            or not all(isinstance(v, (int, float, np.floating)) and not isinstance(v, bool) for v in value)):
+        raise _bad(key, where, "a 3-vector [x, y, z]", value)
+    return tuple(float(v) for v in value)
+
+
+def _line(value, key, where):
+    """[axis, value]: axis x, y or z and a number in mm or "middle" (kept as given)."""
+    ok = isinstance(value, (list, tuple)) and len(value) == 2 and str(value[0]) in AXES
+    if ok and value[1] != "middle":
+        try:
+            float(value[1])
+        except (TypeError, ValueError):
+            ok = False
+    if not ok:
+        raise InputError(f"bad receptor line {list(value) if isinstance(value, tuple) else value}: "
+                         f"use z=<mm> or z=middle (3D), x=<mm>")
+    return tuple(value)
+
+
+def _sweep(value, key, where):
+    axis, offsets = parse_sweep(value)
+    _finite(offsets, key, where)
+    return axis, tuple(float(v) for v in offsets)
+
+
+def _finite(values, key, where, low=None, strict=False):
+    """Raise InputError unless every value is finite and above `low` (strict: > low, else >= low)."""
+    v = np.atleast_1d(np.asarray(values, float))
+    bad = ~np.isfinite(v)
+    if low is not None:
+        bad |= (v <= low) if strict else (v < low)
+    if not len(v) or bad.any():
+        want = "finite" + ("" if low is None else f" and {'>' if strict else '>='} {low:g}")
+        shown = values[0] if isinstance(values, tuple) and len(values) == 1 else values
+        raise InputError(f"{where} {key} must be {want}, got {shown!r}")
+
+
+def _key(unit: str, parse, default=None, doc: str = "", toml: str | None = None):
+    """A scene key: its unit, parser (value, key, table) -> typed value, default and meaning."""
+    factory = default if callable(default) else None
+    kw = {"default_factory": factory} if factory else {"default": default}
+    return field(**kw, metadata={"unit": unit, "parse": parse, "doc": doc, "toml": toml})
+
+
+def _toml_name(f) -> str:
+    return f.metadata.get("toml") or f.name
+
+
+def _parse_table(cls, table, where: str, **given):
+    """Keyword values of dataclass `cls` from a TOML table: unknown keys and wrong types are errors."""
+    if not isinstance(table, dict):
+        raise InputError(f"{where} must be a table")
+    keys = {_toml_name(f): f for f in dataclasses.fields(cls) if f.metadata.get("parse")}
+    unknown = set(table) - set(keys) - set(given)
+    if unknown:
+        raise InputError(f"unknown key(s) {sorted(unknown)} in {where}; allowed: {sorted(set(keys) | set(given))}")
+    out = {}
+    for name, f in keys.items():
+        if name in table:
+            out[f.name] = f.metadata["parse"](table[name], name, where)
+    return out
+
+
+# --------------------------------------------------------------------------- schema
+@dataclass(frozen=True)
+class Receptors:
+    """[receptors]: where receptor points lie and what is measured there."""
+    depths_mm: tuple = _key("mm", _values, lambda: tuple(DEFAULT_DEPTHS_MM), "depths below the surface")
+    spacing_mm: float = _key("mm", _number, 1.0, "spacing of the receptor sites")
+    line: tuple | None = _key("[axis, mm | 'middle']", _line, None, "sites on the plane x[axis] = value only")
+    measures: tuple = _key("", _names, lambda: tuple(DEFAULT_MEASURES), "fem.core.measures names")
+
+    @classmethod
+    def from_dict(cls, table) -> Receptors:
+        kw = _parse_table(cls, table, "[receptors]")
+        if "depths_mm" in kw:
+            _finite(kw["depths_mm"], "depths_mm", "[receptors]", 0.0)
+        if "spacing_mm" in kw:
+            _finite(kw["spacing_mm"], "spacing_mm", "[receptors]", 0.0, strict=True)
+        if "measures" in kw:
+            check_names(kw["measures"])
+        return cls(**kw)
+
+
+@dataclass(frozen=True)
+class Output:
+    """[output]: optional files of the run folder."""
+    pvd: bool | None = _key("", _boolean, None, "full fields per indentation (None: up to 20 indentations)")
+    plots: bool = _key("", _boolean, True, "PNG figures per experiment")
+
+    @classmethod
+    def from_dict(cls, table) -> Output:
+        return cls(**_parse_table(cls, table, "[output]"))
+
+
+@dataclass(frozen=True)
+class Trace:
+    """[experiment.trace]: the time course of an experiment's depth (or force), as fractions of it
+    over time (`fem.experiments.traces.fractions`); each sample is one quasi-static indentation."""
+    shape: str = _key("", _text, "ramp_hold", "ramp_hold, sine, steps, table or scan")
+    samples: int = _key("", _count, 100, "sample times (sine, ramp_hold, steps, table)")
+    ramp_s: float = _key("s", _number, 0.1, "ramp time (ramp_hold, steps)")
+    hold_s: float = _key("s", _number, 0.5, "hold time (ramp_hold, steps: per level)")
+    release_s: float = _key("s", _number, 0.1, "release time (ramp_hold)")
+    rest_s: float = _key("s", _number, 0.0, "time at rest after the release (ramp_hold)")
+    frequency_hz: float = _key("Hz", _number, 0.0, "sine frequency (at most fem.experiments.traces.QUASI_STATIC_HZ)")
+    cycles: float = _key("", _number, 1.0, "sine periods")
+    levels: tuple = _key("", _values, tuple, "fractions of the depth (steps, table)")
+    times_s: tuple = _key("s", _values, tuple, "sample times of the levels (table)")
+    speed_mm_s: float = _key("mm/s", _number, 0.0, "speed along the sweep (scan)")
+
+    @classmethod
+    def from_dict(cls, table, where: str) -> Trace:
+        from fem.experiments.traces import check
+
+        trace = cls(**_parse_table(cls, table, f"{where} trace"))
+        check(trace, where)
+        return trace
+
+
+@dataclass(frozen=True)
+class Afferents:
+    """[afferents]: spiking afferents over the pad (fem.receptors.afferents), driven by the traced experiments."""
+    classes: tuple = _key("", _names, lambda: ("SA1", "RA"), "afferent classes (fem.receptors.transduction.CLASSES)")
+    density_per_cm2: tuple | None = _key("1/cm^2", _densities, None,
+                                         "per class (default: the fingertip densities of fem.receptors.transduction)")
+    radius_mm: float | None = _key("mm", _number, None, "only sites this close to where the first traced "
+                                                       "experiment touches first (default: the whole pad)")
+    input: str = _key("", _text, "stress", "stress (normal stress at the afferent, compression +) or sed")
+    gain: float = _key("", _number, 1.0, "factor on the input (the published parameters are fit to stress in MPa)")
+    noisy: bool = _key("", _boolean, True, "membrane noise of the published model (seeded)")
+    seed: int = _key("", _count, 0, "seed of the placement and the noise")
+
+    @classmethod
+    def from_dict(cls, table) -> Afferents:
+        from fem.receptors.transduction import class_data
+
+        kw = _parse_table(cls, table, "[afferents]")
+        for name in kw.get("classes", ()):
+            class_data(name)
+        for name, dens in kw.get("density_per_cm2") or ():
+            if name not in kw.get("classes", ("SA1", "RA")):
+                raise InputError(f"[afferents] density_per_cm2 names {name}, not one of the classes")
+            _finite(dens, f"density_per_cm2 {name}", "[afferents]", 0.0, strict=True)
+        if kw.get("input", "stress") not in ("stress", "sed"):
+            raise InputError(f"[afferents] input must be stress or sed, got {kw['input']!r}")
+        if "radius_mm" in kw:
+            _finite(kw["radius_mm"], "radius_mm", "[afferents]", 0.0, strict=True)
+        if "gain" in kw:
+            _finite(kw["gain"], "gain", "[afferents]", 0.0, strict=True)
+        return cls(**kw)
+
+
+@dataclass(frozen=True)
+class Experiment:
+    """[[experiment]]: one indentor, placed, at depths or a force, possibly swept."""
+    name: str = _key("", _text, None, "file stem of its outputs (default experiment<k>)")
+    indentor: str = _key("", _text, None, "fem.contact.indentors code, e.g. C5, bar:1.5, step:3")
+    orientation: str | float = _key("deg", _orientation, "parallel", "length axis: parallel, perpendicular or deg")
+    position_mm: tuple | str | None = _key("mm", _position, None,
+                                           '[x, z], [x, y, z] or "top" (None: x = 0 at the middle of the pad)')
+    incline_deg: float | None = _key("deg", _number, None, "finger incline (fem.contact.indentors.approach_direction)")
+    approach: tuple | None = _key("", _vector3, None, "direction of travel (default: the model's support)")
+    depth_mm: tuple | None = _key("mm", _values, None, "depths beyond first touch")
+    force_N: float | None = _key("N", _number, None, "total force (N/mm in 2D); the depth is solved for")
+    equal_force: bool = _key("", _boolean, False, "with force_N: every part carries force_N")
+    max_depth_mm: float = _key("mm", _number, MAX_DEPTH_MM, "depth limit of force control")
+    sweep: tuple | None = _key("axis=start:stop:step mm", _sweep, None, "(axis index, offsets mm) of the sweep")
+    trace: Trace | None = _key("", None, None, "[experiment.trace]: time course of the depth or force")  # noqa: RUF009
+
+    @classmethod
+    def from_dict(cls, table, k: int = 0) -> Experiment:
+        """The k-th (0-based) [[experiment]] table."""
+        kw = _parse_table(cls, table, "[[experiment]]", trace=None)
+        kw.setdefault("name", f"experiment{k + 1}")
+        if "indentor" not in kw:
+            raise InputError(f"experiment '{kw['name']}': give its indentor (a fem.contact.indentors code)")
+        if ("depth_mm" in kw) == ("force_N" in kw):
+            raise InputError(f"experiment '{kw['name']}': give depth_mm or force_N (one of them)")
+        where = f"experiment '{kw['name']}'"
+        shapes_for(kw["indentor"])
+        orientation_deg(kw.get("orientation", "parallel"))
+        for key, low, strict in (("depth_mm", 0.0, False), ("force_N", 0.0, True),
+                                 ("max_depth_mm", 0.0, True), ("incline_deg", None, False)):
+            if key in kw:
+                _finite(kw[key], key, where, low, strict)
+        if "trace" in table:
+            kw["trace"] = Trace.from_dict(table["trace"], where)
+            if len(kw.get("depth_mm") or (0,)) != 1:
+                raise InputError(f"{where}: a traced experiment takes one depth_mm (its full depth), "
+                                 f"got {list(kw['depth_mm'])}")
+            if (kw["trace"].shape == "scan") != ("sweep" in kw):
+                raise InputError(f'{where}: a "scan" trace needs a sweep, and a sweep with a trace '
+                                 f'needs shape = "scan"')
+        return cls(**kw)
+
+    def check_dim(self, dim: int) -> None:
+        """Raise InputError for what a model of `dim` (2 or 3) cannot do: a 2D (plane-strain)
+        model has its indentors along the finger axis only, and no z sweep."""
+        if dim == 2 and orientation_deg(self.orientation) != 0:
+            raise InputError(f"experiment '{self.name}': orientation {self.orientation!r} on a 2D model; "
+                             "2D (plane-strain) indentors lie along the finger axis: use parallel")
+        if dim == 2 and self.sweep is not None and self.sweep[0] == 2:
+            raise InputError(f"experiment '{self.name}': a z sweep on a 2D model; sweep along x (x=start:stop:step)")
+
+    @property
+    def loads(self) -> list[dict]:
+        """Keyword arguments of ContactModel.indent, one dict per indentation at each position."""
+        if self.force_N is None:
+            return [{"depth_mm": d} for d in self.depth_mm]
+        return [{"force_N": self.force_N, "equal_force": self.equal_force, "max_depth_mm": self.max_depth_mm}]
+
+    @property
+    def indentations(self) -> list[tuple[np.ndarray, dict]]:
+        """[(offset (3,) mm, keyword arguments of ContactModel.indent)] in order: every offset at
+        every load, or one per sample time of the trace (a zero fraction: depth 0)."""
+        if self.trace is None:
+            return [(off, load) for off in self.offsets_mm for load in self.loads]
+        _, offsets, frac = self._samples()
+        full = self.loads[0]
+
+        def load(f):
+            if f <= 0:
+                return {"depth_mm": 0.0}
+            if self.force_N is None:
+                return {"depth_mm": float(f * full["depth_mm"])}
+            return {**full, "force_N": float(f * full["force_N"])}
+        return [(off, load(f)) for off, f in zip(offsets, frac)]
+
+    @property
+    def times_s(self) -> np.ndarray | None:
+        """(n,) sample times of the trace [s] (None without one), one per `indentations` entry."""
+        return None if self.trace is None else self._samples()[0]
+
+    def _samples(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(times (n,) s, offsets (n, 3) mm, fractions (n,)) of the trace's sample times."""
+        from fem.experiments.traces import fractions
+
+        sweep = self.offsets_mm if self.sweep is not None else None
+        times, frac = fractions(self.trace, sweep)
+        return times, (sweep if sweep is not None else np.zeros((len(frac), 3))), frac
+
+    @property
+    def offsets_mm(self) -> np.ndarray:
+        """(k, 3) indentor offsets of the sweep (one zero row without a sweep)."""
+        if self.sweep is None:
+            return np.zeros((1, 3))
+        axis, vals = self.sweep
+        offsets = np.zeros((len(vals), 3))
+        offsets[:, axis] = vals
+        return offsets
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A scene: material overrides, receptors, outputs and the experiments, in order."""
+    experiments: tuple = _key("", None, tuple, "[[experiment]] tables", toml="experiment")
+    material: str | tuple | None = _key("", _material, None, "material code, or moduli per layer in MPa "
+                                                           "(default: the model's)")
+    nu: float | None = _key("", _number, None, "Poisson ratio (default: the model's)")
+    receptors: Receptors = _key("", lambda v, key, where: Receptors.from_dict(v), Receptors, "[receptors]")  # noqa: RUF009
+    output: Output = _key("", lambda v, key, where: Output.from_dict(v), Output, "[output]")  # noqa: RUF009
+    afferents: Afferents | None = _key("", lambda v, key, where: Afferents.from_dict(v), None, "[afferents]")  # noqa: RUF009
+
+    @classmethod
+    def from_dict(cls, d, source: str = "scene") -> Scene:
+        """A scene from its TOML tables; source names it in the error of a missing experiment."""
+        kw = _parse_table(cls, d, "scene", experiment=None)
+        tables = d.get("experiment")
+        if not tables:
+            raise InputError(f"{source} has no [[experiment]] table")
+        if not isinstance(tables, list):
+            raise InputError("scene experiment: expected [[experiment]] tables")
+        if "material" in kw or "nu" in kw:
+            Material(kw.get("material", "m33338"), kw.get("nu", 0.48))      # the code's form and nu's range
+        experiments = tuple(Experiment.from_dict(t, k) for k, t in enumerate(tables))
+        if kw.get("afferents") is not None and not any(e.trace is not None for e in experiments):
+            raise InputError(f"{source}: [afferents] spike over time; give an experiment a time course "
+                             f"([experiment.trace], e.g. shape = \"ramp_hold\")")
+        return cls(experiments=experiments, **kw)
+
+    def check_dim(self, dim: int) -> None:
+        """Raise InputError if an experiment cannot run on a model of `dim` (`Experiment.check_dim`)."""
+        for exp in self.experiments:
+            exp.check_dim(dim)
+        if self.afferents is not None and dim != 3:
+            raise InputError("[afferents] lie over a pad: they need a 3D model (mesh a preset or a "
+                             "reconstruction in 3D); a 2D section has no pad area")
+
+
+def load_scene(path) -> Scene:
+    """Read a TOML scene file (`Scene.from_dict`)."""
+    import tomllib
+
+    try:
+        with open(path, "rb") as fh:
+            d = tomllib.load(fh)
+    except (OSError, ValueError) as exc:             # TOMLDecodeError, UnicodeDecodeError are ValueErrors
+        raise InputError(f"cannot read scene '{path}': {' '.join(str(exc).split())}") from None
+    return Scene.from_dict(d, f"scene '{path}'")
