@@ -49,24 +49,13 @@ def _save(fig, name):
     save(fig, RESULTS / f"analysis_bench_{name}.png", dpi=100)
 
 
-def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--work", default="out/analysis_bench")
-    args = ap.parse_args(argv)
-    work = Path(args.work)
-    model = work / "cyl8"
-    if not (model / "mesh.vtu").is_file():
-        assert pipeline.main(["mesh", "--preset", "cylinder8", "--bone", "--out", str(model), "--quiet"]) == 0
-    md = ["# Receptor analysis benchmark (2D cylinder 8 mm with bone, m33338, nu 0.48)", ""]
-    t0 = time.perf_counter()
-    probe = Probe2D(model, np.round(np.arange(-3.0, 3.0001, 0.05), 3), depths_mm=(0.75,))
-    md.append(f"Probe setup (121 receptors at 0.75 mm): {time.perf_counter() - t0:.1f} s")
-
-    # 1. receptive fields
+def _receptive_fields(probe) -> list[str]:
+    """1. Receptive fields from a wedge swept over the receptor at 0.75 mm (half-peak threshold), and
+    the shear hole against the threshold: markdown lines; writes analysis_bench_fields.png."""
     t0 = time.perf_counter()
     pos = np.round(np.arange(-2.0, 2.0001, 0.05), 3)
     fields = {c: point_load_field(probe, c, pos) for c in ("sed_MPa", "max_compressive_strain", "abs:strain_xy")}
-    md += ["", "## Receptive fields (wedge line load 1 mm deep swept in 0.05 mm steps, half-peak threshold)", "",
+    md = ["", "## Receptive fields (wedge line load 1 mm deep swept in 0.05 mm steps, half-peak threshold)", "",
            "| measure | shape | ON extent mm | OFF hole mm |", "|---|---|---|---|"]
     md += [f"| {c} | {f.shape} | {f.diameter_mm:.2f} | {f.hole_mm:.2f} |" for c, f in fields.items()]
     shear = fields["abs:strain_xy"]
@@ -83,14 +72,17 @@ def main(argv=None):
         ax[1, k].set(title=f"{f.shape}: {f.diameter_mm:.2f} mm" + (f", hole {f.hole_mm:.2f}" if f.shape == "annulus"
                                                                      else ""))
     _save(fig, "fields")
-    md.append(f"\n({time.perf_counter() - t0:.1f} s)")
+    return md + [f"\n({time.perf_counter() - t0:.1f} s)"]
 
-    # 2. two-point
+
+def _two_point(probe) -> list[str]:
+    """2. The two-point intensive cue (max SED at 0.75 mm) against the separation: markdown lines;
+    writes analysis_bench_two_point.png."""
     t0 = time.perf_counter()
     seps = np.round(np.arange(0.0, 4.0001, 0.2), 3)
     c = two_point_curves(probe, seps, depth_mm=0.5)
     in3 = seps <= 3.0 + 1e-9
-    md += ["", "## Two-point intensive cue (tips 0.5 mm deep; equal force = half the single-tip force each)", "",
+    md = ["", "## Two-point intensive cue (tips 0.5 mm deep; equal force = half the single-tip force each)", "",
            f"force per load {c['force_per_load_N']:.4g} N/mm; settling = smallest separation after which max SED "
            f"stays within 5 % of the reference", "",
            "| protocol | vs last value, 0-3 mm | vs last value, 0-4 mm | max abs(two / alone - 1) from 1.6 mm |",
@@ -112,13 +104,16 @@ def main(argv=None):
         a.set(title=f"equal {key}", xlabel="half separation, mm", ylabel="max SED at 0.75 mm, MPa")
         a.legend(fontsize=8)
     _save(fig, "two_point")
-    md.append(f"\n({time.perf_counter() - t0:.1f} s)")
+    return md + [f"\n({time.perf_counter() - t0:.1f} s)"]
 
-    # 3. gaps
+
+def _gaps(probe) -> list[str]:
+    """3. |strain_xy| peaks across the gap between two 1 mm bars: markdown lines; writes
+    analysis_bench_gaps.png."""
     t0 = time.perf_counter()
     gaps = [0.5, 0.75, 1.0, 1.5, 2.0, 3.0]
     rows, prof = gap_analysis(probe, 1.0, gaps)
-    md += ["", "## Shear-strain peaks across gaps (two 1 mm bars 1 mm deep, |strain_xy| at 0.75 mm)", "",
+    md = ["", "## Shear-strain peaks across gaps (two 1 mm bars 1 mm deep, |strain_xy| at 0.75 mm)", "",
            "| gap mm | inter-peak mm | peak left | peak right | slope per mm |", "|---|---|---|---|---|"]
     md += [f"| {r['gap_mm']:g} | {r['interpeak_mm']:.3f} | {r['peak_left']:.4f} | {r['peak_right']:.4f} | "
            f"{r['slope_per_mm']:.4f} |" for r in rows]
@@ -128,9 +123,13 @@ def main(argv=None):
     ax.set(xlabel="receptor x, mm", ylabel="|strain_xy| at 0.75 mm")
     ax.legend(fontsize=7)
     _save(fig, "gaps")
-    md.append(f"\n({time.perf_counter() - t0:.1f} s)")
+    return md + [f"\n({time.perf_counter() - t0:.1f} s)"]
 
-    # 4. spatial profile vs population response
+
+def _profiles(model: Path) -> list[str]:
+    """4. Spatial response profiles of central and off-centre receptors against the population
+    response (grating 0.5 mm, indented by `pipeline.py indent` if not yet): markdown lines; writes
+    analysis_bench_profiles.png and analysis_bench_population.png."""
     t0 = time.perf_counter()
     runs_dir = model / "gratings"
     if not (runs_dir / "grating_0.5_receptors.csv").is_file():
@@ -141,7 +140,7 @@ def main(argv=None):
     x_sites = run.population("grating_0.5", "sed_MPa", 0.75, 0.0)[0]
     pos, central = run.profile("grating_0.5", "sed_MPa", 0.75, 0.0, align=False)
     pos = pos - x_sites[run.site_index("grating_0.5", 0.0)]          # stimulus position relative to the receptor
-    md += ["", "## Spatial response profile vs population (grating 0.5 mm, SED at 0.75 mm)", "",
+    md = ["", "## Spatial response profile vs population (grating 0.5 mm, SED at 0.75 mm)", "",
            "Receptor sites are those of the indent grid (spacing 0.5 mm): the most central one is not at x = 0.", "",
            "| receptor x mm | rms difference to the most central profile (both shifted), % of its peak |",
            "|---|---|"]
@@ -162,9 +161,12 @@ def main(argv=None):
     a.set(title="population response: all receptors at 0.75 mm, grating at -8 mm", xlabel="receptor x, mm",
           ylabel="sed_MPa")
     _save(fig, "population")
-    md.append(f"\n({time.perf_counter() - t0:.1f} s)")
+    return md + [f"\n({time.perf_counter() - t0:.1f} s)"]
 
-    # 5. lumped receptor model on an FE measure
+
+def _dynamics(probe) -> list[str]:
+    """5. Lumped SA and RA receptor models driven by the SED at the central receptor under a C5
+    ramp-and-hold: markdown lines; writes analysis_bench_dynamics.png."""
     depths = np.round(np.arange(0.1, 1.0001, 0.1), 3)
     c5 = make_indentor("C5", orientation="parallel")
     sed = [probe.measure(c5, [0.0], ["sed_MPa"], depth_mm=d)[0]["sed_MPa"][0, 0, 60] for d in depths]
@@ -173,7 +175,7 @@ def main(argv=None):
     fig, ax = _subplots(3, 1, figsize=(7, 6), sharex=True)
     ax[0].plot(t, S)
     ax[0].set(ylabel="SED at 0.75 mm, MPa", title="C5 ramp 0.1 s to 1 mm, hold 1 s, release 0.1 s")
-    md += ["", "## Lumped receptor model driven by the SED under a C5 ramp-and-hold", "",
+    md = ["", "## Lumped receptor model driven by the SED under a C5 ramp-and-hold", "",
            "| receptor | tau s | rate end of ramp | end of hold / peak | firing time in withdrawal, ms of 100 |",
            "|---|---|---|---|---|"]
     for a, (name, tau) in zip(ax[1:], (("SA", 5.0), ("RA", 0.01))):
@@ -188,6 +190,26 @@ def main(argv=None):
                   f"{out['rate'][hold_end] / out['rate'].max():.3f} | {fire:.0f} |")
     ax[-1].set_xlabel("time, s")
     _save(fig, "dynamics")
+    return md
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--work", default="out/analysis_bench")
+    args = ap.parse_args(argv)
+    work = Path(args.work)
+    model = work / "cyl8"
+    if not (model / "mesh.vtu").is_file():
+        assert pipeline.main(["mesh", "--preset", "cylinder8", "--bone", "--out", str(model), "--quiet"]) == 0
+    md = ["# Receptor analysis benchmark (2D cylinder 8 mm with bone, m33338, nu 0.48)", ""]
+    t0 = time.perf_counter()
+    probe = Probe2D(model, np.round(np.arange(-3.0, 3.0001, 0.05), 3), depths_mm=(0.75,))
+    md.append(f"Probe setup (121 receptors at 0.75 mm): {time.perf_counter() - t0:.1f} s")
+    md += _receptive_fields(probe)
+    md += _two_point(probe)
+    md += _gaps(probe)
+    md += _profiles(model)
+    md += _dynamics(probe)
     (RESULTS / "analysis_bench.md").write_text("\n".join(md) + "\n")
     print("\n".join(md))
 

@@ -40,6 +40,7 @@ import pipeline  # noqa: E402
 from fem.biomech.deflection import DeflectionExperiment, Profile, cylinder_series, layer_study  # noqa: E402
 from fem.biomech.fit import fit_material  # noqa: E402
 from fem.biomech.line_load import compare_line_load  # noqa: E402
+from fem.core.model import Model  # noqa: E402
 
 
 def cpu():
@@ -73,7 +74,8 @@ def write(out, results):
              "2D five-layer cross-sections of the parametric models (`mesh --section-z`), 2 shared cores.", ""]
     if "study" in results:
         rows = [[r["model"], r["dofs"], f"{r['wall_s']:.1f}", f"{r['cpu_s']:.1f}", r["evaluations"],
-                 "; ".join(f"{e['layer']}: {e['most_affected_mm']:.2f} ({e['difference_mm']:+.2f})" for e in r["effects"])]
+                 "; ".join(f"{e['layer']}: {e['most_affected_mm']:.2f} ({e['difference_mm']:+.2f})"
+                           for e in r["effects"])]
                 for r in results["study"]]
         lines += _table("(a) Layer study around m43338, wedge 2 mm (thesis fig. 6-10)",
                         ["model", "DOFs", "wall s", "CPU s", "ratios solved",
@@ -121,6 +123,99 @@ def write(out, results):
     (out / "biomech_bench.md").write_text("\n".join(lines))
 
 
+def _layer_studies(models, results, out):
+    """(a) The layer study around m43338 at 2 mm on each model."""
+    results["study"] = []
+    for name, folder in models.items():
+        t, c = time.perf_counter(), cpu()
+        exp = DeflectionExperiment(folder)
+        st = layer_study(exp, "m43338", depths_mm=(2.0,))
+        results["study"].append({"model": name, "dofs": exp.ndof,
+                                 "wall_s": time.perf_counter() - t, "cpu_s": cpu() - c,
+                                 "evaluations": st.evaluations, "effects": [e.__dict__ for e in st.effects]})
+        exp.clear()
+        write(out, results)
+        print(f"study {name}: {results['study'][-1]['wall_s']:.1f} s", flush=True)
+
+
+def _fit_recovery(models, results, out):
+    """(b) fit-material on deflections generated for known moduli plus 5 um noise, on each model."""
+    results["fit"] = []
+    truth = np.array([4.0, 2.6, 3.3, 3.2, 8.0])
+    for name, folder in models.items():
+        exp = DeflectionExperiment(folder)
+        dist = np.arange(0.2, 3.51, 0.1)
+        rng = np.random.default_rng(3)
+        data = [Profile(p.depth_mm, dist, p.at(dist) + rng.normal(0, 0.005, dist.size))
+                for p in exp.profiles(truth, [1.0, 2.0])]
+        t = time.perf_counter()
+        fit = fit_material(exp, data, "m43338", (2, 3, 4))
+        err = (fit.log10_Pa - truth)[1:4]
+        results["fit"].append({"model": name, "truth": truth[1:4].tolist(),
+                               "fitted": np.round(fit.log10_Pa[1:4], 3).tolist(),
+                               "error_over_sigma": np.round(err / fit.std_log10, 2).tolist(),
+                               "factor": np.round(fit.factor, 3).tolist(), "rms_mm": fit.rms_mm,
+                               "evaluations": fit.evaluations, "wall_s": time.perf_counter() - t,
+                               "best_code": fit.best_code, "correlation_34": float(fit.correlation[1, 2])})
+        exp.clear()
+        write(out, results)
+        print(f"fit {name}: {results['fit'][-1]}", flush=True)
+
+
+def _nonlinear_2d(work, results, out, quick):
+    """(c) Large deformation against linear under the 2D line load on monkey sections."""
+    depths = [0.05, 0.25, 0.5, 1.0, 1.5, 2.0]
+    results["nonlinear"] = []
+    sections = [(0.25, False), (0.125, False), (0.125, True)]
+    for size, slip in (sections[:1] if quick else sections):
+        folder = mesh(work / f"monkey_{size}", "monkey", 5, size)
+        c = compare_line_load(folder, depths, material="m43338", half_width_mm=0.25, step_mm=0.1, slip=slip)
+        results["nonlinear"].append(_comparison(f"monkey z=5, {size} mm", folder, c, slip))
+        write(out, results)
+        print(f"nonlinear {size} slip={slip}: {results['nonlinear'][-1]}", flush=True)
+
+
+def _deflection_3d(work, results, out):
+    """(d) The 3D coarse monkey fingertip under a wedge 1 mm deep, m43338 and m33338."""
+    folder = mesh3d(work / "monkey3d_0.6")
+    exp = DeflectionExperiment(folder)
+    dist = [0.5, 1.0, 2.0, 3.0]
+    r = {"distance_mm": dist, "materials": {}}
+    for code in ("m43338", "m33338"):
+        t = time.perf_counter()
+        p = exp.profiles(code, [1.0])[0]
+        r["materials"][code] = {"deflection_mm": np.round(p.at(dist), 3).tolist(), "force_N": p.force_N,
+                                "wall_s": time.perf_counter() - t}
+    r["dofs"] = exp.ndof
+    results["3d"] = r
+    write(out, results)
+    print("3d", r, flush=True)
+
+
+def _nonlinear_3d(work, results, out):
+    """(e) Large deformation against linear on the 3D coarse monkey fingertip."""
+    folder = mesh3d(work / "monkey3d_0.6")
+    c = compare_line_load(folder, [0.05, 0.5, 1.0, 1.5, 2.0], material="m43338", half_width_mm=0.6,
+                          half_length_mm=1.5, step_mm=0.25, progress=True)
+    results["nonlinear_3d"] = [_comparison("monkey 3D, 0.6 mm", folder, c, False)]
+    write(out, results)
+    print("nonlinear 3d", results["nonlinear_3d"], flush=True)
+
+
+def _cylinders(work, results, out):
+    """(f) Cylinders C1-C8 at constant force on the monkey section, C1-C5 at constant depth in 3D."""
+    results["cylinders"] = []
+    for name, folder, codes, load in (("monkey z=5, 0.125 mm", mesh(work / "monkey_0.125", "monkey", 5, 0.125),
+                                       None, {"forces_N": [0.001, 0.002]}),
+                                      ("monkey 3D, 0.6 mm", mesh3d(work / "monkey3d_0.6"),
+                                       ["C1", "C2", "C3", "C4", "C5"], {"depths_mm": [0.5, 1.0]})):
+        t = time.perf_counter()
+        s = cylinder_series(DeflectionExperiment(folder), "m43338", codes, **load)
+        results["cylinders"].append({"model": name, "wall_s": time.perf_counter() - t, **s.report()})
+        write(out, results)
+        print("cylinders", results["cylinders"][-1], flush=True)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results"))
@@ -138,85 +233,21 @@ def main():
     results = json.loads(old.read_text()) if old.is_file() else {}
     results["size_mm"] = size
     if "a" in args.parts:
-        results["study"] = []
-    for name, folder in (models.items() if "a" in args.parts else []):
-        t, c = time.perf_counter(), cpu()
-        exp = DeflectionExperiment(folder)
-        st = layer_study(exp, "m43338", depths_mm=(2.0,))
-        results["study"].append({"model": name, "dofs": exp.ndof,
-                                 "wall_s": time.perf_counter() - t, "cpu_s": cpu() - c,
-                                 "evaluations": st.evaluations, "effects": [e.__dict__ for e in st.effects]})
-        exp.clear()
-        write(out, results)
-        print(f"study {name}: {results['study'][-1]['wall_s']:.1f} s", flush=True)
+        _layer_studies(models, results, out)
     if "b" in args.parts:
-        results["fit"] = []
-    truth = np.array([4.0, 2.6, 3.3, 3.2, 8.0])
-    for name, folder in (models.items() if "b" in args.parts else []):
-        exp = DeflectionExperiment(folder)
-        dist = np.arange(0.2, 3.51, 0.1)
-        rng = np.random.default_rng(3)
-        data = [Profile(p.depth_mm, dist, p.at(dist) + rng.normal(0, 0.005, dist.size))
-                for p in exp.profiles(truth, [1.0, 2.0])]
-        t = time.perf_counter()
-        fit = fit_material(exp, data, "m43338", (2, 3, 4))
-        err = (fit.log10_Pa - truth)[1:4]
-        results["fit"].append({"model": name, "truth": truth[1:4].tolist(), "fitted": np.round(fit.log10_Pa[1:4], 3).tolist(),
-                               "error_over_sigma": np.round(err / fit.std_log10, 2).tolist(),
-                               "factor": np.round(fit.factor, 3).tolist(), "rms_mm": fit.rms_mm,
-                               "evaluations": fit.evaluations, "wall_s": time.perf_counter() - t,
-                               "best_code": fit.best_code, "correlation_34": float(fit.correlation[1, 2])})
-        exp.clear()
-        write(out, results)
-        print(f"fit {name}: {results['fit'][-1]}", flush=True)
-    depths = [0.05, 0.25, 0.5, 1.0, 1.5, 2.0]
+        _fit_recovery(models, results, out)
     if "c" in args.parts:
-        results["nonlinear"] = []
-        sections = [(0.25, False), (0.125, False), (0.125, True)]
-        for size, slip in (sections[:1] if args.quick else sections):
-            folder = mesh(work / f"monkey_{size}", "monkey", 5, size)
-            c = compare_line_load(folder, depths, material="m43338", half_width_mm=0.25, step_mm=0.1, slip=slip)
-            results["nonlinear"].append(_comparison(f"monkey z=5, {size} mm", folder, c, slip))
-            write(out, results)
-            print(f"nonlinear {size} slip={slip}: {results['nonlinear'][-1]}", flush=True)
+        _nonlinear_2d(work, results, out, args.quick)
     if "d" in args.parts:
-        folder = mesh3d(work / "monkey3d_0.6")
-        exp = DeflectionExperiment(folder)
-        dist = [0.5, 1.0, 2.0, 3.0]
-        r = {"distance_mm": dist, "materials": {}}
-        for code in ("m43338", "m33338"):
-            t = time.perf_counter()
-            p = exp.profiles(code, [1.0])[0]
-            r["materials"][code] = {"deflection_mm": np.round(p.at(dist), 3).tolist(), "force_N": p.force_N,
-                                    "wall_s": time.perf_counter() - t}
-        r["dofs"] = exp.ndof
-        results["3d"] = r
-        write(out, results)
-        print("3d", r, flush=True)
+        _deflection_3d(work, results, out)
     if "e" in args.parts:
-        folder = mesh3d(work / "monkey3d_0.6")
-        c = compare_line_load(folder, [0.05, 0.5, 1.0, 1.5, 2.0], material="m43338", half_width_mm=0.6,
-                              half_length_mm=1.5, step_mm=0.25, progress=True)
-        results["nonlinear_3d"] = [_comparison("monkey 3D, 0.6 mm", folder, c, False)]
-        write(out, results)
-        print("nonlinear 3d", results["nonlinear_3d"], flush=True)
+        _nonlinear_3d(work, results, out)
     if "f" in args.parts:
-        results["cylinders"] = []
-        for name, folder, codes, load in (("monkey z=5, 0.125 mm", mesh(work / "monkey_0.125", "monkey", 5, 0.125),
-                                           None, {"forces_N": [0.001, 0.002]}),
-                                          ("monkey 3D, 0.6 mm", mesh3d(work / "monkey3d_0.6"),
-                                           ["C1", "C2", "C3", "C4", "C5"], {"depths_mm": [0.5, 1.0]})):
-            t = time.perf_counter()
-            s = cylinder_series(DeflectionExperiment(folder), "m43338", codes, **load)
-            results["cylinders"].append({"model": name, "wall_s": time.perf_counter() - t, **s.report()})
-            write(out, results)
-            print("cylinders", results["cylinders"][-1], flush=True)
+        _cylinders(work, results, out)
 
 
 def _comparison(name, folder, c, slip):
     """JSON row of a fem.biomech.line_load.LineLoadComparison."""
-    from fem.core.model import Model
-
     return {"model": name, "dofs": int(Model.from_mesh(folder / "mesh.vtu").ndof), "slip": slip,
             "depths_mm": c.depths_mm.tolist(), "force_ratio": (c.force_nonlinear_N / c.force_linear_N).tolist(),
             "max_difference": c.max_difference.tolist(), "min_J": c.min_J.tolist(),

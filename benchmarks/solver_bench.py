@@ -127,54 +127,58 @@ def table(rows, cols):
     return "\n".join([head, sep, *body])
 
 
-def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--quick", action="store_true", help="small meshes only")
-    ap.add_argument("--mesh", help="also time a fingertip mesh.vtu (regions nail, support, volar)")
-    ap.add_argument("--out", default=str(Path(__file__).parent / "results" / "solver_bench.md"))
-    args = ap.parse_args(argv)
-
-    load_start = os.getloadavg()[0]
-    sizes = [(6, 4), (10, 6), (14, 10), (20, 14)] + ([] if args.quick else [(26, 22)])
+def _size_study(quick: bool) -> tuple[list[dict], str]:
+    """Cost and error against mesh size (nu = 0.48): the rows and their markdown table."""
+    sizes = [(6, 4), (10, 6), (14, 10), (20, 14)] + ([] if quick else [(26, 22)])
     rows = []
     for n_arc, n_rad in sizes:
         rows.append(run(n_arc, n_rad))
         print(f"size   {rows[-1]}", flush=True)
-    size_table = table(rows, [("DOFs", "{dofs}"), ("elements", "{elements}"),
+    return rows, table(rows, [("DOFs", "{dofs}"), ("elements", "{elements}"),
                               ("assembly [s]", "{assemble_s:.2f}"), ("CPU", "{assemble_cpu_s:.2f}"),
                               ("factorisation [s]", "{factor_s:.2f}"), ("CPU", "{factor_cpu_s:.2f}"),
-                              ("nnz(L) [1e6]", "{nnz_L:.1f}"), ("re-solve 1 RHS [s]", "{solve1_s:.3f}"), ("CPU", "{solve1_cpu_s:.3f}"),
+                              ("nnz(L) [1e6]", "{nnz_L:.1f}"), ("re-solve 1 RHS [s]", "{solve1_s:.3f}"),
+                              ("CPU", "{solve1_cpu_s:.3f}"),
                               ("64 RHS [s]", "{solve64_s:.2f}"), ("CPU", "{solve64_cpu_s:.2f}"),
                               ("u error", "{u_err:.2%}"),
                               ("mean-stress error", "{mean_err:.2%}"), ("residual", "{residual:.1e}")])
 
+
+def _nu_study() -> str:
+    """Stability against nu (9k DOFs): markdown table."""
     nu_rows = []
     for nu in (0.3, 0.45, 0.48, 0.49, 0.499, 0.4999):
         nu_rows.append({"nu": nu, **run(10, 6, nu=nu)})
         print(f"nu     {nu_rows[-1]}", flush=True)
-    nu_table = table(nu_rows, [("nu", "{nu}"), ("u error", "{u_err:.2%}"),
-                               ("mean-stress error", "{mean_err:.2%}"), ("residual", "{residual:.1e}")])
+    return table(nu_rows, [("nu", "{nu}"), ("u error", "{u_err:.2%}"),
+                           ("mean-stress error", "{mean_err:.2%}"), ("residual", "{residual:.1e}")])
 
+
+def _contrast_study() -> str:
+    """Stability against the stiffness contrast of two layers: markdown table."""
     contrast_rows = []
     for contrast in (1.0, 1e2, 1e4, 1e6):
         for nu in (0.48, 0.4999):
             contrast_rows.append({"contrast": contrast, "nu": nu, **run(16, 6, nu=nu, contrast=contrast)})
             print(f"stiff  {contrast_rows[-1]}", flush=True)
-    contrast_table = table(contrast_rows, [("E outer / E inner", "{contrast:.0e}"), ("nu", "{nu}"),
-                                           ("u error", "{u_err:.2%}"), ("mean-stress error (worst layer)", "{mean_err:.2%}"),
-                                           ("residual", "{residual:.1e}")])
+    return table(contrast_rows, [("E outer / E inner", "{contrast:.0e}"), ("nu", "{nu}"),
+                                 ("u error", "{u_err:.2%}"),
+                                 ("mean-stress error (worst layer)", "{mean_err:.2%}"),
+                                 ("residual", "{residual:.1e}")])
 
-    mesh_section = ""
-    if args.mesh:
-        row = fingertip(args.mesh)
-        print(f"mesh   {row}", flush=True)
-        mesh_section = f"""
-## Fingertip mesh `{args.mesh}` (m43338, nu = 0.48, nail fixed, support, 0.1 N on volar)
+
+def _mesh_section(mesh) -> str:
+    """The fingertip mesh.vtu's section of the report (fingertip): markdown."""
+    row = fingertip(mesh)
+    print(f"mesh   {row}", flush=True)
+    return f"""
+## Fingertip mesh `{mesh}` (m43338, nu = 0.48, nail fixed, support, 0.1 N on volar)
 
 """ + table([row], [("DOFs", "{dofs}"), ("elements", "{elements}"), ("assembly [s]", "{assemble_s:.1f}"),
                     ("CPU", "{assemble_cpu_s:.1f}"), ("factorisation [s]", "{factor_s:.1f}"),
                     ("CPU", "{factor_cpu_s:.1f}"), ("first solve [s]", "{solve_s:.2f}"), ("CPU", "{solve_cpu_s:.2f}"),
-                    ("re-solve 1 RHS [s]", "{solve1_s:.2f}"), ("CPU", "{solve1_cpu_s:.2f}"), ("64 RHS [s]", "{solve64_s:.2f}"), ("CPU", "{solve64_cpu_s:.2f}"),
+                    ("re-solve 1 RHS [s]", "{solve1_s:.2f}"), ("CPU", "{solve1_cpu_s:.2f}"),
+                    ("64 RHS [s]", "{solve64_s:.2f}"), ("CPU", "{solve64_cpu_s:.2f}"),
                     ("nnz(L) [1e6]", "{nnz_L:.1f}"), ("refinement steps (64 RHS)", "{refine}"),
                     ("refinement tolerance", "{refine_tol:.0e}"), ("residual", "{residual:.1e}")]) + """
 
@@ -186,18 +190,23 @@ the inverse of the Schur complement (the whole contact compliance).
                     ("CPU", "{cond_factor_cpu_s:.1f}"), ("nnz(L) [1e6]", "{cond_nnz_L:.1f}"),
                     ("inverse [s]", "{inverse_s:.1f}"), ("CPU", "{inverse_cpu_s:.1f}")]) + "\n"
 
-    md = f"""# Solver benchmark
 
-`python benchmarks/solver_bench.py{' --quick' if args.quick else ''}` on {platform.machine()}, {os.cpu_count()} cores
+def _report(quick: bool, load_start: float, backend: str, size_table: str, nu_table: str, contrast_table: str,
+            mesh_section: str) -> str:
+    """solver_bench.md; the load average at its end is read now."""
+    return f"""# Solver benchmark
+
+`python benchmarks/solver_bench.py{' --quick' if quick else ''}` on {platform.machine()}, {os.cpu_count()} cores
 shared with other jobs (load average {load_start:.1f} at the start, {os.getloadavg()[0]:.1f} at the end:
-times are wall-clock under that load), backend `{rows[0]['backend']}`. Lame thick sphere octant (a = 1, b = 2 mm,
+times are wall-clock under that load), backend `{backend}`. Lame thick sphere octant (a = 1, b = 2 mm,
 p = 0.01 MPa, E = 0.01 MPa) with exact surface tractions; P2 + per-layer P1 pressure.
 
 ## Cost and error against mesh size (nu = 0.48)
 
 Assembly = model set-up, K_dev, divergence and pressure operators; factorisation = LDL^T of the
 constrained saddle-form matrix; re-solve = `system.solve` of 1 and of 64 new right-hand sides
-(random nodal forces) with the stored factors, including the residual check. Wall-clock [s] and CPU [s] summed over threads: under contention the CPU time is
+(random nodal forces) with the stored factors, including the residual check. Wall-clock [s] and CPU [s] """ \
+        f"""summed over threads: under contention the CPU time is
 the load-independent cost.
 
 {size_table}
@@ -210,6 +219,21 @@ the load-independent cost.
 
 {contrast_table}
 {mesh_section}"""
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="small meshes only")
+    ap.add_argument("--mesh", help="also time a fingertip mesh.vtu (regions nail, support, volar)")
+    ap.add_argument("--out", default=str(Path(__file__).parent / "results" / "solver_bench.md"))
+    args = ap.parse_args(argv)
+
+    load_start = os.getloadavg()[0]
+    rows, size_table = _size_study(args.quick)
+    nu_table = _nu_study()
+    contrast_table = _contrast_study()
+    mesh_section = _mesh_section(args.mesh) if args.mesh else ""
+    md = _report(args.quick, load_start, rows[0]["backend"], size_table, nu_table, contrast_table, mesh_section)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_name(out.name + ".tmp")

@@ -11,6 +11,9 @@ import numpy as np
 from scipy.spatial import ConvexHull
 
 from fingertip.errors import InputError
+from reconstruct.calibrate import sample_borders
+from reconstruct.camera import Camera, border_tables, perspective_fit, proximal_cut
+from reconstruct.sections import fit_support, support_curve, support_samples, support_values
 
 TANGENT_TOL_PX = 0.3        # rms disagreement of a section's tangents above which it is refused
 FOLD_TOL_PX = 1.0           # depth of a fold of the outline (inside its own hull) that is refused
@@ -96,10 +99,6 @@ def check_parallel(views, frame, theta_deg, levels, k_max, rms_mm, width_px, s_l
     with a rod the warning also gives how far the parallel z = 0 lies from the cut that the
     pinhole camera finds (camera.proximal_cut).
     """
-    from reconstruct.camera import Camera, border_tables, perspective_fit, proximal_cut
-    from reconstruct.calibrate import sample_borders
-    from reconstruct.sections import fit_support, support_curve, support_samples, support_values
-
     px = frame.scale.sx_mm
     med = float(np.nanmedian(rms_mm)) / px
     if not med > PARALLEL_RMS_PX:

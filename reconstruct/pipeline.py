@@ -1,23 +1,28 @@
 """The image stage end to end: turntable folder -> sections.json, surface.stl, report.png."""
 from __future__ import annotations
 
+import hashlib
+import json
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 from tqdm import tqdm
 
-from reconstruct.calibrate import Frame, estimate_axis, sample_borders, template_scale
 from fingertip.errors import InputError
 from fingertip.staging import staged_output, write_json
+from reconstruct.calibrate import Frame, estimate_axis, sample_borders, template_scale
+from reconstruct.camera import Camera, border_tables, perspective_fit, proximal_cut
+from reconstruct.checks import (CUT_SEARCH_PX, CUT_TOL_PX, ROD_MARGIN_PX, TANGENT_TOL_PX, check_parallel,
+                                consistent_sections)
+from reconstruct.lens import Lens, calibrate_lens, undistort_borders
+from reconstruct.report import write_report
 from reconstruct.sections import (N_POINTS, choose_levels, convex_section, fit_support, harmonics_for,
                                   support_curve, support_samples, support_values, tangent_polygon)
-from reconstruct.camera import Camera, border_tables, perspective_fit, proximal_cut
-from reconstruct.lens import calibrate_lens, undistort_borders
-from reconstruct.checks import (CUT_SEARCH_PX, CUT_TOL_PX, ROD_MARGIN_PX, TANGENT_TOL_PX, check_parallel,
-                               consistent_sections)
 from reconstruct.silhouette import Borders, extract_borders
 from reconstruct.surface import loft
 from reconstruct.turntable import Turntable, load_turntable
@@ -49,7 +54,8 @@ class Reconstruction:
             f"scale           {sc.sx_mm * 1000:.3f} x {sc.sy_mm * 1000:.3f} um/px (aspect {sc.aspect:.4f}, "
             f"template fit {sc.rms_px:.3f} px rms)",
             f"rotation axis   offset {fr.offset_px(t.shape_px[1]):+.2f} px "
-            f"from centre, tilt {fr.tilt_deg:+.3f} deg (fit rms {self.axis_fit.get('axis_fit_rms_mm', 0) * 1000:.1f} um)",
+            f"from centre, tilt {fr.tilt_deg:+.3f} deg "
+            f"(fit rms {self.axis_fit.get('axis_fit_rms_mm', 0) * 1000:.1f} um)",
             f"sections        {len(self.z_mm)}, z {self.z_mm[0]:.2f} .. {self.z_mm[-1]:.2f} mm, "
             f"spacing {dz.min():.2f} .. {dz.max():.2f} mm",
             f"camera          {self.camera_text()}",
@@ -106,8 +112,6 @@ def _rotate180(b: Borders, width_px: int) -> Borders:
 def extract_all(table: Turntable, progress: bool = False) -> list[Borders]:
     """Borders of every view (two threads: OpenCV and NumPy release the GIL; BLAS is kept to one
     thread each, its own threads would only compete with ours)."""
-    from threadpoolctl import threadpool_limits
-
     def one(path):
         b = extract_borders(table.read(path), name=path.name)
         if not np.isfinite(b.left_px).any():
@@ -166,9 +170,16 @@ def _trim(s: np.ndarray, width: np.ndarray, rod: bool, tip_fraction: float, ds: 
     return float(s[lo]), float(s[hi]), trims
 
 
-def reconstruct(table: Turntable, spacing_mm=(0.5, 2.0), tol_mm: float = 0.02,
-                tip_fraction: float = 0.5, progress: bool = False) -> Reconstruction:
-    """Run the image stage on a loaded turntable folder (nothing is written)."""
+class _Options(NamedTuple):
+    """The section options of `reconstruct`: spacing_mm (min, max) and tol_mm for choose_levels,
+    tip_fraction for _trim."""
+    spacing_mm: tuple
+    tol_mm: float
+    tip_fraction: float
+
+
+def _checked_options(spacing_mm, tol_mm: float, tip_fraction: float) -> _Options:
+    """The options, refused (InputError) when out of range."""
     lo, hi = spacing_mm
     if not 0 < lo <= hi:
         raise InputError(f"section spacing must satisfy 0 < min <= max, got {lo} .. {hi} mm")
@@ -176,7 +187,13 @@ def reconstruct(table: Turntable, spacing_mm=(0.5, 2.0), tol_mm: float = 0.02,
         raise InputError(f"--tol-mm must be positive, got {tol_mm}")
     if not 0 <= tip_fraction < 1:
         raise InputError(f"--tip-fraction must be in [0, 1), got {tip_fraction}")
-    timings, warnings = {}, []
+    return _Options(spacing_mm, tol_mm, tip_fraction)
+
+
+def _silhouettes(table: Turntable, progress: bool, timings: dict) -> tuple[Lens | None, Borders, list[Borders]]:
+    """The lens calibrated on the checkerboard photos (None without them), the calibration
+    template's borders and every view's, undistorted with the lens; each step's time (s) goes
+    into timings ("lens", "silhouettes")."""
     lens = None
     if table.checkerboard_paths:
         t0 = time.perf_counter()
@@ -190,9 +207,12 @@ def reconstruct(table: Turntable, spacing_mm=(0.5, 2.0), tol_mm: float = 0.02,
         calib = undistort_borders(calib, lens)
         views = [undistort_borders(b, lens) for b in views]
     timings["silhouettes"] = time.perf_counter() - t0
+    return lens, calib, views
 
-    t0 = time.perf_counter()
-    height_px, width_px = table.shape_px
+
+def _upright(views: list[Borders], calib: Borders, width_px: int) -> tuple[list[Borders], Borders, bool, bool]:
+    """The views' and the template's borders turned by 180 deg when the rod enters from the top;
+    whether they were turned, and whether there is a rod (more than half the views touch an edge)."""
     top = sum(b.touches_top for b in views)
     bottom = sum(b.touches_bottom for b in views)
     turned = top > bottom                     # rod enters from the top: turn everything by 180 deg
@@ -200,8 +220,13 @@ def reconstruct(table: Turntable, spacing_mm=(0.5, 2.0), tol_mm: float = 0.02,
         views = [_rotate180(b, width_px) for b in views]
         calib = _rotate180(calib, width_px)
     rod = max(top, bottom) > len(views) // 2
-    scale = template_scale(calib, table.template_diameter_mm)
-    camera, camera_record = _camera(table, lens, scale, turned)
+    return views, calib, turned, rod
+
+
+def _axis(table: Turntable, views: list[Borders], scale) -> tuple[Frame, dict]:
+    """The finger frame, its rotation axis from turntable.toml when given there, else estimated from
+    the views; and the record of the axis fit."""
+    height_px, width_px = table.shape_px
     frame = Frame(scale, height_px)
     if table.axis_offset_px is not None or table.tilt_deg is not None:
         frame.x0_mm = (width_px / 2 + float(table.axis_offset_px or 0.0)) * scale.sx_mm
@@ -209,87 +234,146 @@ def reconstruct(table: Turntable, spacing_mm=(0.5, 2.0), tol_mm: float = 0.02,
         axis_fit = {"source": "turntable.toml"}
     else:
         frame, axis_fit = estimate_axis(views, table.angles_deg, frame)
+    return frame, axis_fit
+
+
+class _Levels(NamedTuple):
+    """Support-function fits of the sections at the chosen axial positions: levels (m,) s in mm;
+    coef (2K+1, m); phi, h (2n, m) tangent directions (rad) and support values (mm); rms (m,) mm
+    tangent disagreement; s_lo: s (mm) of z = 0; trims: what was cut off, for the summary."""
+    levels: np.ndarray
+    coef: np.ndarray
+    phi: np.ndarray
+    h: np.ndarray
+    rms: np.ndarray
+    s_lo: float
+    trims: dict
+
+
+def _sampling(table: Turntable, scale) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Axial positions s (mm) one pixel row apart, the view angles from the volar view (deg) and
+    180 directions (rad) in which choose_levels compares the sections."""
+    ds = scale.sy_mm
+    s_fine = np.arange(0.0, table.shape_px[0] * scale.sy_mm, ds)
+    theta = table.angles_deg - table.volar_view_deg
+    dirs = np.linspace(0, 2 * np.pi, 180, endpoint=False)
+    return s_fine, theta, dirs
+
+
+def _parallel_levels(table: Turntable, views: list[Borders], frame: Frame, scale, rod: bool, opts: _Options,
+                     warnings: list[str]) -> _Levels:
+    """The sections under a parallel projection; check_parallel's warning, if any, goes into warnings."""
+    s_fine, theta, dirs = _sampling(table, scale)
+    ds = scale.sy_mm
+    left, right = sample_borders(views, frame, s_fine)
+    width = np.where(np.isfinite(left).all(axis=0) & np.isfinite(right).all(axis=0),
+                     np.max(right - left, axis=0), np.nan)
+    s_lo, s_hi, trims = _trim(s_fine, width, rod, opts.tip_fraction, ds, scale.sy_mm)
+    inside = (s_fine >= s_lo) & (s_fine <= s_hi)
+    phi, h = support_samples(left[:, inside], right[:, inside], theta)
+    k_max = harmonics_for(phi)
+    coef_fine = fit_support(phi, h, k_max)
+    levels = choose_levels(s_fine[inside], support_values(coef_fine, dirs), opts.spacing_mm, opts.tol_mm)
+    left_l, right_l = sample_borders(views, frame, levels)
+    phi, h_l = support_samples(left_l, right_l, theta)
+    coef_l = fit_support(phi, h_l, k_max)
+    rms_l = np.sqrt(np.mean((support_values(coef_l, phi).T - h_l) ** 2, axis=0))
+    phi_l = np.repeat(phi[:, None], len(levels), axis=1)
+    parallel = check_parallel(views, frame, theta, levels, k_max, rms_l, table.shape_px[1], s_lo, rod)
+    if parallel:
+        warnings.append(parallel)
+    return _Levels(levels, coef_l, phi_l, h_l, rms_l, s_lo, trims)
+
+
+def _pinhole_levels(table: Turntable, views: list[Borders], frame: Frame, scale, camera: Camera, rod: bool,
+                    opts: _Options) -> _Levels:
+    """The sections under the pinhole camera, from where the views' tangents agree."""
+    s_fine, theta, dirs = _sampling(table, scale)
+    ds = scale.sy_mm
+    width_px = table.shape_px[1]
+    k_max = harmonics_for(support_samples(np.zeros((len(views), 1)), np.zeros((len(views), 1)), theta)[0])
+    tables = border_tables(views, frame)
+    coef_f, phi_f, h_f, rms_f = perspective_fit(views, frame, camera, width_px, theta, s_fine, k_max,
+                                                tables=tables)
+    n = len(views)
+    width = np.where(np.isfinite(h_f).all(axis=0), np.max(h_f[:n] + h_f[n:], axis=0), np.nan)
+    s_lo, s_hi, trims = _trim(s_fine, width, rod, opts.tip_fraction, ds, scale.sy_mm, margin_px=0.0)
+    # the rim of the proximal cut is seen below the cut in perspective, and its tangents
+    # disagree by many px: the first section lies ROD_MARGIN_PX past where they stop doing so
+    # (as in the parallel path: closer to the blurred corner of the cut the tangents agree but
+    # are off by up to 1 px) where the tangents agree to TANGENT_TOL_PX; with a rod, the cut
+    # itself (z = 0) comes from the rim's shadow (camera.proximal_cut)
+    rms_px = np.nan_to_num(rms_f / scale.sx_mm, nan=np.inf)
+    ok = rms_px <= TANGENT_TOL_PX
+    i_lo, i_hi = np.searchsorted(s_fine, s_lo), np.searchsorted(s_fine, s_hi, side="right") - 1
+    while i_lo < i_hi and rms_px[i_lo] > CUT_TOL_PX:
+        i_lo += 1
+    i_first = i_lo + int(np.ceil(ROD_MARGIN_PX * scale.sy_mm / ds))     # past the blurred corner
+    while i_first < i_hi and not ok[i_first:i_first + 3].all():
+        i_first += 1
+    while i_hi > i_first and not ok[i_hi - 2:i_hi + 1].all():
+        i_hi -= 1
+    parts = [f"s {a:.2f} .. {b:.2f} mm" for a, b in ((s_lo, s_fine[i_first]), (s_fine[i_hi], s_hi)) if b > a]
+    if parts:
+        trims["tangents disagree"] = " and ".join(parts) + " along the axis"
+    s_lo, s_first, s_hi = float(s_fine[i_lo]), float(s_fine[i_first]), float(s_fine[i_hi])
+    if s_hi - s_first < 2 * ds:
+        raise InputError("the tangents of the views disagree on every section: check camera_distance_mm "
+                         "in turntable.toml and the images")
+    if rod:                       # z = 0 at the cut: fit the rim's shadow to the borders below
+        cut = proximal_cut(tables, frame, camera, width_px, theta, support_curve(coef_f[:, i_first:i_first + 1])[0],
+                           s_first, CUT_SEARCH_PX * scale.sy_mm)
+        if cut is not None and cut < s_first:
+            s_lo = cut
+    inside = (s_fine >= s_first) & (s_fine <= s_hi)
+    levels = choose_levels(s_fine[inside], support_values(coef_f[:, inside], dirs), opts.spacing_mm, opts.tol_mm)
+    coef_l, phi_l, h_l, rms_l = perspective_fit(views, frame, camera, width_px, theta, levels, k_max,
+                                                tables=tables)
+    return _Levels(levels, coef_l, phi_l, h_l, rms_l, s_lo, trims)
+
+
+def _sections(fit: _Levels, scale, warnings: list[str]) -> tuple[np.ndarray, list, list, object]:
+    """z (m,) mm, the convex sections, their tangent polygons and the lofted surface
+    (trimesh.Trimesh) of the sections consistent_sections keeps; its warning goes into warnings."""
+    curves = support_curve(fit.coef, N_POINTS)
+    keep, note = consistent_sections(fit.levels - fit.s_lo, curves, fit.rms / scale.sx_mm, scale.sx_mm)
+    if note:
+        warnings.append(note)
+    levels, curves, phi_l, h_l = fit.levels[keep], curves[keep], fit.phi[:, keep], fit.h[:, keep]
+    sections = [convex_section(c) for c in curves]
+    polygons = []
+    for i in range(len(levels)):
+        ok = np.isfinite(phi_l[:, i]) & np.isfinite(h_l[:, i])
+        polygons.append(tangent_polygon(phi_l[ok, i], h_l[ok, i]))
+    z = levels - fit.s_lo
+    return z, sections, polygons, loft(z, sections)
+
+
+def reconstruct(table: Turntable, spacing_mm=(0.5, 2.0), tol_mm: float = 0.02,
+                tip_fraction: float = 0.5, progress: bool = False) -> Reconstruction:
+    """Run the image stage on a loaded turntable folder (nothing is written)."""
+    opts = _checked_options(spacing_mm, tol_mm, tip_fraction)
+    timings, warnings = {}, []
+    lens, calib, views = _silhouettes(table, progress, timings)
+
+    t0 = time.perf_counter()
+    views, calib, turned, rod = _upright(views, calib, table.shape_px[1])
+    scale = template_scale(calib, table.template_diameter_mm)
+    camera, camera_record = _camera(table, lens, scale, turned)
+    frame, axis_fit = _axis(table, views, scale)
     if table.coverage_deg < 360.0 - 1e-6:
         warnings.append(f"the views cover {table.coverage_deg:.0f} deg, not 360: each tangent is seen once, "
                         f"so noise is not averaged and the axis estimate is less certain")
     timings["calibration"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    ds = scale.sy_mm
-    s_fine = np.arange(0.0, height_px * scale.sy_mm, ds)
-    theta = table.angles_deg - table.volar_view_deg
-    dirs = np.linspace(0, 2 * np.pi, 180, endpoint=False)
     if camera is None:
-        left, right = sample_borders(views, frame, s_fine)
-        width = np.where(np.isfinite(left).all(axis=0) & np.isfinite(right).all(axis=0),
-                         np.max(right - left, axis=0), np.nan)
-        s_lo, s_hi, trims = _trim(s_fine, width, rod, tip_fraction, ds, scale.sy_mm)
-        inside = (s_fine >= s_lo) & (s_fine <= s_hi)
-        phi, h = support_samples(left[:, inside], right[:, inside], theta)
-        k_max = harmonics_for(phi)
-        coef_fine = fit_support(phi, h, k_max)
-        levels = choose_levels(s_fine[inside], support_values(coef_fine, dirs), spacing_mm, tol_mm)
-        left_l, right_l = sample_borders(views, frame, levels)
-        phi, h_l = support_samples(left_l, right_l, theta)
-        coef_l = fit_support(phi, h_l, k_max)
-        rms_l = np.sqrt(np.mean((support_values(coef_l, phi).T - h_l) ** 2, axis=0))
-        phi_l = np.repeat(phi[:, None], len(levels), axis=1)
-        parallel = check_parallel(views, frame, theta, levels, k_max, rms_l, width_px, s_lo, rod)
-        if parallel:
-            warnings.append(parallel)
+        fit = _parallel_levels(table, views, frame, scale, rod, opts, warnings)
     else:
-        k_max = harmonics_for(support_samples(np.zeros((len(views), 1)), np.zeros((len(views), 1)), theta)[0])
-        tables = border_tables(views, frame)
-        coef_f, phi_f, h_f, rms_f = perspective_fit(views, frame, camera, width_px, theta, s_fine, k_max,
-                                                    tables=tables)
-        n = len(views)
-        width = np.where(np.isfinite(h_f).all(axis=0), np.max(h_f[:n] + h_f[n:], axis=0), np.nan)
-        s_lo, s_hi, trims = _trim(s_fine, width, rod, tip_fraction, ds, scale.sy_mm, margin_px=0.0)
-        # the rim of the proximal cut is seen below the cut in perspective, and its tangents
-        # disagree by many px: the first section lies ROD_MARGIN_PX past where they stop doing so
-        # (as in the parallel path: closer to the blurred corner of the cut the tangents agree but
-        # are off by up to 1 px) where the tangents agree to TANGENT_TOL_PX; with a rod, the cut
-        # itself (z = 0) comes from the rim's shadow (camera.proximal_cut)
-        rms_px = np.nan_to_num(rms_f / scale.sx_mm, nan=np.inf)
-        ok = rms_px <= TANGENT_TOL_PX
-        i_lo, i_hi = np.searchsorted(s_fine, s_lo), np.searchsorted(s_fine, s_hi, side="right") - 1
-        while i_lo < i_hi and rms_px[i_lo] > CUT_TOL_PX:
-            i_lo += 1
-        i_first = i_lo + int(np.ceil(ROD_MARGIN_PX * scale.sy_mm / ds))     # past the blurred corner
-        while i_first < i_hi and not ok[i_first:i_first + 3].all():
-            i_first += 1
-        while i_hi > i_first and not ok[i_hi - 2:i_hi + 1].all():
-            i_hi -= 1
-        parts = [f"s {a:.2f} .. {b:.2f} mm" for a, b in ((s_lo, s_fine[i_first]), (s_fine[i_hi], s_hi)) if b > a]
-        if parts:
-            trims["tangents disagree"] = " and ".join(parts) + " along the axis"
-        s_lo, s_first, s_hi = float(s_fine[i_lo]), float(s_fine[i_first]), float(s_fine[i_hi])
-        if s_hi - s_first < 2 * ds:
-            raise InputError("the tangents of the views disagree on every section: check camera_distance_mm "
-                             "in turntable.toml and the images")
-        if rod:                       # z = 0 at the cut: fit the rim's shadow to the borders below
-            cut = proximal_cut(tables, frame, camera, width_px, theta, support_curve(coef_f[:, i_first:i_first + 1])[0],
-                               s_first, CUT_SEARCH_PX * scale.sy_mm)
-            if cut is not None and cut < s_first:
-                s_lo = cut
-        inside = (s_fine >= s_first) & (s_fine <= s_hi)
-        levels = choose_levels(s_fine[inside], support_values(coef_f[:, inside], dirs), spacing_mm, tol_mm)
-        coef_l, phi_l, h_l, rms_l = perspective_fit(views, frame, camera, width_px, theta, levels, k_max,
-                                                    tables=tables)
-    curves = support_curve(coef_l, N_POINTS)
-    keep, note = consistent_sections(levels - s_lo, curves, rms_l / scale.sx_mm, scale.sx_mm)
-    if note:
-        warnings.append(note)
-    levels, curves, coef_l, phi_l, h_l = levels[keep], curves[keep], coef_l[:, keep], phi_l[:, keep], h_l[:, keep]
-    sections = [convex_section(c) for c in curves]
-    polygons = []
-    for i in range(len(levels)):
-        ok = np.isfinite(phi_l[:, i]) & np.isfinite(h_l[:, i])
-        polygons.append(tangent_polygon(phi_l[ok, i], h_l[ok, i]))
-    z = levels - s_lo
-    surface = loft(z, sections)
+        fit = _pinhole_levels(table, views, frame, scale, camera, rod, opts)
+    z, sections, polygons, surface = _sections(fit, scale, warnings)
     timings["sections"] = time.perf_counter() - t0
-    return Reconstruction(table, frame, z, sections, polygons, surface, s_lo, trims, axis_fit,
+    return Reconstruction(table, frame, z, sections, polygons, surface, fit.s_lo, fit.trims, axis_fit,
                           timings, turned, warnings, camera_record)
 
 
@@ -323,8 +407,6 @@ def sections_document(rec: Reconstruction) -> dict:
 
 def input_hash(table: Turntable, options: dict) -> str:
     """Hash of every input file's bytes and the options: outputs with this hash are current."""
-    import hashlib
-
     digest = hashlib.sha256(repr(sorted(options.items())).encode())
     manifest = table.folder / "turntable.toml"
     for path in [*table.image_paths, table.calibration_path, *table.checkerboard_paths] + \
@@ -335,8 +417,7 @@ def input_hash(table: Turntable, options: dict) -> str:
 
 
 def _current(out_dir: Path, key: str) -> bool:
-    import json
-
+    """Whether out_dir holds every output, written from inputs and options with this input_hash."""
     try:
         doc = json.loads((out_dir / "sections.json").read_text())
     except (OSError, ValueError):
@@ -351,8 +432,6 @@ def reconstruct_folder(images, out_dir, spacing_mm=(0.5, 2.0), tol_mm: float = 0
     Returns the Reconstruction, or None when out_dir already holds outputs of the same inputs and
     options (unless force).
     """
-    from reconstruct.report import write_report
-
     table = load_turntable(images)
     key = input_hash(table, {"spacing_mm": tuple(spacing_mm), "tol_mm": tol_mm, "tip_fraction": tip_fraction})
     if not force and _current(Path(out_dir), key):

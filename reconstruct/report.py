@@ -4,16 +4,15 @@ from __future__ import annotations
 import textwrap
 
 import numpy as np
+from matplotlib.figure import Figure
+
+from reconstruct.silhouette import extract_borders
 
 
 def write_report(rec, path) -> None:
     """Six panels: the volar view with its extracted border and the axis; its grey-level histogram
     with the Otsu level and the 50 % level; section width and height along z; sections inside their
     tangent polygons; all sections seen from the side; the summary."""
-    from matplotlib.figure import Figure
-
-    from reconstruct.silhouette import extract_borders
-
     t, fr = rec.table, rec.frame
     i = int(np.argmin(np.abs(np.mod(t.angles_deg - t.volar_view_deg + 180, 360) - 180)))
     img = t.read(t.image_paths[i])

@@ -13,6 +13,7 @@ the right border lies at distance h(pi - theta) and the left border at h(-theta)
 from __future__ import annotations
 
 import numpy as np
+from scipy.optimize import linprog
 from scipy.signal import savgol_filter
 from scipy.spatial import ConvexHull, HalfspaceIntersection
 
@@ -109,8 +110,6 @@ def tangent_polygon(phi: np.ndarray, h: np.ndarray) -> np.ndarray:
 
 
 def _chebyshev_centre(normals: np.ndarray, h: np.ndarray) -> np.ndarray:
-    from scipy.optimize import linprog
-
     res = linprog([0, 0, -1], A_ub=np.column_stack([normals, np.ones(len(h))]), b_ub=h,
                   bounds=[(None, None), (None, None), (0, None)])
     if not res.success or res.x[2] <= 0:

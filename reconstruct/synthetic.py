@@ -1,5 +1,6 @@
 """Turntable renderer (parallel projection or pinhole camera) of a solid with known sections
-(fem.geometry.presets shapes), for tests, benchmarks and sample_images/, and the comparison of reconstructed sections with that solid.
+(fem.geometry.presets shapes), for tests, benchmarks and sample_images/, and the comparison of
+reconstructed sections with that solid.
 
 The solid is any object with `name`, `params` (JSON-ready dict), `z_range_mm`, `rod_radius_mm`,
 `extent_table(z_mm, directions)` and, for the comparison, `convex_section(z_mm, n)` and
@@ -186,6 +187,85 @@ def _photograph(coverage, cam, blur_px, noise, vignetting, rng):
     return np.clip(np.rint(img), 0, 255).astype(np.uint8)
 
 
+def _check_render_options(n_views: int, span_deg: float, size_px, mm_per_px: float, aspect: float,
+                          camera_distance_mm: float | None, write_camera: bool, distortion, checkerboard: int) -> None:
+    """Refuse render_turntable's options out of range or that need a camera distance (InputError)."""
+    if n_views < 1 or span_deg <= 0 or mm_per_px <= 0 or aspect <= 0 or min(size_px) < 16:
+        raise InputError("render needs views >= 1, span > 0, mm-per-px > 0, aspect > 0 and images >= 16 px")
+    if camera_distance_mm is not None and not camera_distance_mm > 0:
+        raise InputError(f"--camera-distance-mm must be positive, got {camera_distance_mm}")
+    if write_camera and camera_distance_mm is None:
+        raise InputError("--write-camera needs --camera-distance-mm")
+    if (distortion is not None or checkerboard) and camera_distance_mm is None:
+        raise InputError("--distortion and --checkerboard need --camera-distance-mm (the lens's focal length)")
+    if checkerboard and checkerboard < 5:
+        raise InputError(f"--checkerboard needs at least 5 photos, got {checkerboard}")
+
+
+def _pinhole_lens(size_px, mm_per_px: float, aspect: float, camera_distance_mm: float, distortion) -> Lens:
+    """The rendering camera's lens: focal length camera_distance_mm / mm_per_px px (over aspect
+    vertically), principal point at the image centre, radial distortion (k1[, k2]) or none."""
+    w_px, h_px = size_px
+    matrix = np.array([[camera_distance_mm / mm_per_px, 0.0, (w_px - 1) / 2],
+                       [0.0, camera_distance_mm / (mm_per_px * aspect), (h_px - 1) / 2], [0.0, 0.0, 1.0]])
+    k = [float(x) for x in (distortion or ())][:2]
+    return Lens(matrix, np.array(k + [0.0] * (5 - len(k))), 0.0, 0, tuple(size_px))
+
+
+def _view_borders(shape, cam: _Camera, size_px, axis_offset_px: float, tilt_deg: float,
+                  camera_distance_mm: float | None, z0_s: float, s_grid: np.ndarray, thetas: np.ndarray):
+    """A function of the view index i giving the silhouette's left and right borders u (mm) on
+    s_grid at view thetas[i] (deg): from the shape's extent table in parallel projection
+    (camera_distance_mm None), else seen by the pinhole camera that far from the axis."""
+    n_views = len(thetas)
+    n_dirs = np.column_stack([-np.cos(np.deg2rad(thetas)), np.sin(np.deg2rad(thetas))])
+    if camera_distance_mm is None:
+        h = shape.extent_table(s_grid - z0_s, np.vstack([n_dirs, -n_dirs]))
+        return lambda i: (-h[:, n_views + i], h[:, i])
+    w_px, h_px = size_px
+    ta = np.deg2rad(tilt_deg)
+    dx, dy = ((w_px - 1) / 2 - (w_px / 2 + axis_offset_px)) * cam.sx, (h_px - 0.5 - (h_px - 1) / 2) * cam.sy
+    u_c, s_c = dx * np.cos(ta) - dy * np.sin(ta), dx * np.sin(ta) + dy * np.cos(ta)
+    ext = shape.extent_table(np.linspace(*shape.z_range_mm, 9), n_dirs)
+    reach = 1.2 * max(np.abs(ext[np.isfinite(ext)]).max(), 1.0)
+    if reach >= 0.5 * camera_distance_mm:
+        raise InputError(f"--camera-distance-mm {camera_distance_mm} is inside or too close to the body: "
+                         f"give at least {2 * reach:.0f} mm")
+    dz = s_grid[1] - s_grid[0]
+    margin = np.ceil((np.abs(s_grid - s_c).max() * reach / (camera_distance_mm - reach) + 0.5) / dz)
+    z_tab = s_grid[0] + dz * np.arange(-margin, len(s_grid) + margin)       # s_grid extended
+    verts, normal = _chains(shape, z_tab, z0_s)
+    w_grid = np.arange(-reach, reach, min(0.04, 0.5 * min(cam.sx, cam.sy)))
+    return lambda i: _perspective_borders(verts, normal, np.deg2rad(thetas[i]), z_tab, s_grid, w_grid,
+                                          camera_distance_mm, u_c, s_c)
+
+
+def _template_coverage(shape, cam: _Camera, s_grid: np.ndarray, template_diameter_mm: float) -> np.ndarray:
+    """Coverage (H, W) of the calibration template: a disc on a shaft of the rod's diameter, axis at
+    the same place."""
+    r_t = template_diameter_mm / 2
+    sc = cam.s.max() / 2 + 1.0
+    ss = s_grid - sc
+    half = np.sqrt(np.clip(r_t**2 - ss**2, 0, None))
+    half = np.where(np.abs(ss) < r_t, half, -np.inf)
+    shaft = max(shape.rod_radius_mm, 0.5)
+    half = np.where(ss < 0, np.maximum(half, shaft), half)
+    return _interval_image(-half, half, s_grid, cam.u, cam.s, cam.sx, cam.sy)
+
+
+def _manifest(step_deg: float, template_diameter_mm: float, camera_distance_mm: float | None = None,
+              board=None) -> str:
+    """turntable.toml of a rendered folder: camera_distance_mm when given, the checkerboard keys when
+    board = (inner corners, square mm) is given."""
+    return (f"# synthetic turntable set rendered by reconstruct.synthetic\n"
+            f"start_deg = 0.0\nstep_deg = {step_deg!r}\n"
+            f"template_diameter_mm = {template_diameter_mm!r}\naxis = \"vertical\"\n"
+            f"volar_view_deg = 0.0\n"
+            + (f"camera_distance_mm = {camera_distance_mm!r}\n" if camera_distance_mm is not None else "")
+            + (f"checkerboard_inner_corners = {list(board[0])}\n"
+               f"checkerboard_square_mm = {board[1]!r}\n" if board is not None else ""))
+
+
 def render_turntable(shape, out_dir, n_views: int = 100, span_deg: float = 360.0,
                      size_px=(700, 900), mm_per_px: float = 0.04, aspect: float = 1.0,
                      blur_px: float = 0.8, noise: float = 2.0, vignetting: float = 0.25,
@@ -210,79 +290,30 @@ def render_turntable(shape, out_dir, n_views: int = 100, span_deg: float = 360.0
     camera distance away, into checkerboard/, and the board keys into turntable.toml.
     Returns the truth dictionary.
     """
-    if n_views < 1 or span_deg <= 0 or mm_per_px <= 0 or aspect <= 0 or min(size_px) < 16:
-        raise InputError("render needs views >= 1, span > 0, mm-per-px > 0, aspect > 0 and images >= 16 px")
-    if camera_distance_mm is not None and not camera_distance_mm > 0:
-        raise InputError(f"--camera-distance-mm must be positive, got {camera_distance_mm}")
-    if write_camera and camera_distance_mm is None:
-        raise InputError("--write-camera needs --camera-distance-mm")
-    if (distortion is not None or checkerboard) and camera_distance_mm is None:
-        raise InputError("--distortion and --checkerboard need --camera-distance-mm (the lens's focal length)")
-    if checkerboard and checkerboard < 5:
-        raise InputError(f"--checkerboard needs at least 5 photos, got {checkerboard}")
+    _check_render_options(n_views, span_deg, size_px, mm_per_px, aspect, camera_distance_mm, write_camera,
+                          distortion, checkerboard)
     rng = np.random.default_rng(seed)
-    lens = None
-    if camera_distance_mm is not None:
-        w_px, h_px = size_px
-        matrix = np.array([[camera_distance_mm / mm_per_px, 0.0, (w_px - 1) / 2],
-                           [0.0, camera_distance_mm / (mm_per_px * aspect), (h_px - 1) / 2], [0.0, 0.0, 1.0]])
-        k = [float(x) for x in (distortion or ())][:2]
-        lens = Lens(matrix, np.array(k + [0.0] * (5 - len(k))), 0.0, 0, tuple(size_px))
+    lens = (None if camera_distance_mm is None else
+            _pinhole_lens(size_px, mm_per_px, aspect, camera_distance_mm, distortion))
     cam = _Camera(size_px, mm_per_px, aspect, axis_offset_px, tilt_deg,
                   lens.undistort if distortion is not None else None)
     z0_s = 2.5 - shape.z_range_mm[0]            # the body starts 2.5 mm above the bottom edge
     s_grid = np.arange(-2.0, cam.s.max() + 2.0, min(mm_per_px, mm_per_px * aspect) / 4)
     thetas = np.arange(n_views) * span_deg / n_views
-    n_dirs = np.column_stack([-np.cos(np.deg2rad(thetas)), np.sin(np.deg2rad(thetas))])
-    if camera_distance_mm is None:
-        h = shape.extent_table(s_grid - z0_s, np.vstack([n_dirs, -n_dirs]))
-    else:
-        w_px, h_px = size_px
-        ta = np.deg2rad(tilt_deg)
-        dx, dy = ((w_px - 1) / 2 - (w_px / 2 + axis_offset_px)) * cam.sx, (h_px - 0.5 - (h_px - 1) / 2) * cam.sy
-        u_c, s_c = dx * np.cos(ta) - dy * np.sin(ta), dx * np.sin(ta) + dy * np.cos(ta)
-        ext = shape.extent_table(np.linspace(*shape.z_range_mm, 9), n_dirs)
-        reach = 1.2 * max(np.abs(ext[np.isfinite(ext)]).max(), 1.0)
-        if reach >= 0.5 * camera_distance_mm:
-            raise InputError(f"--camera-distance-mm {camera_distance_mm} is inside or too close to the body: "
-                             f"give at least {2 * reach:.0f} mm")
-        dz = s_grid[1] - s_grid[0]
-        margin = np.ceil((np.abs(s_grid - s_c).max() * reach / (camera_distance_mm - reach) + 0.5) / dz)
-        z_tab = s_grid[0] + dz * np.arange(-margin, len(s_grid) + margin)       # s_grid extended
-        verts, normal = _chains(shape, z_tab, z0_s)
-        w_grid = np.arange(-reach, reach, min(0.04, 0.5 * min(cam.sx, cam.sy)))
+    borders = _view_borders(shape, cam, size_px, axis_offset_px, tilt_deg, camera_distance_mm, z0_s, s_grid,
+                            thetas)
 
-    names = []
     with staged_output(out_dir) as tmp:
         for i in tqdm(range(n_views), desc="render", unit="view", disable=not progress):
-            if camera_distance_mm is None:
-                a, b = -h[:, n_views + i], h[:, i]
-            else:
-                a, b = _perspective_borders(verts, normal, np.deg2rad(thetas[i]), z_tab, s_grid, w_grid,
-                                            camera_distance_mm, u_c, s_c)
+            a, b = borders(i)
             cov = _interval_image(a, b, s_grid, cam.u, cam.s, cam.sx, cam.sy)
             name = f"view_{i:03d}_{thetas[i]:07.3f}deg.{image_format}"
             cv2.imwrite(str(tmp / name), _photograph(cov, cam, blur_px, noise, vignetting, rng))
-            names.append(name)
-        # calibration template: a disc on a shaft of the rod's diameter, axis at the same place
-        r_t = template_diameter_mm / 2
-        sc = cam.s.max() / 2 + 1.0
-        ss = s_grid - sc
-        half = np.sqrt(np.clip(r_t**2 - ss**2, 0, None))
-        half = np.where(np.abs(ss) < r_t, half, -np.inf)
-        shaft = max(shape.rod_radius_mm, 0.5)
-        half = np.where(ss < 0, np.maximum(half, shaft), half)
-        cov = _interval_image(-half, half, s_grid, cam.u, cam.s, cam.sx, cam.sy)
-        cv2.imwrite(str(tmp / f"calibration.{image_format}"),
-                    _photograph(cov, cam, blur_px, noise, vignetting, rng))
-        (tmp / "turntable.toml").write_text(
-            f"# synthetic turntable set rendered by reconstruct.synthetic\n"
-            f"start_deg = 0.0\nstep_deg = {span_deg / n_views!r}\n"
-            f"template_diameter_mm = {template_diameter_mm!r}\naxis = \"vertical\"\n"
-            f"volar_view_deg = 0.0\n"
-            + (f"camera_distance_mm = {camera_distance_mm!r}\n" if write_camera else "")
-            + (f"checkerboard_inner_corners = {list(checkerboard_inner_corners)}\n"
-               f"checkerboard_square_mm = {checkerboard_square_mm!r}\n" if checkerboard else ""))
+        cov = _template_coverage(shape, cam, s_grid, template_diameter_mm)
+        cv2.imwrite(str(tmp / f"calibration.{image_format}"), _photograph(cov, cam, blur_px, noise, vignetting, rng))
+        (tmp / "turntable.toml").write_text(_manifest(
+            span_deg / n_views, template_diameter_mm, camera_distance_mm if write_camera else None,
+            (checkerboard_inner_corners, checkerboard_square_mm) if checkerboard else None))
         if checkerboard:
             (tmp / "checkerboard").mkdir()
             for i, img in enumerate(render_checkerboards(lens, checkerboard, checkerboard_inner_corners,

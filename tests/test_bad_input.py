@@ -203,12 +203,12 @@ def test_cache_entry_of_wrong_arrays_is_refused(tmp_path):
 
 def test_internal_error_is_one_line(monkeypatch, tmp_path):
     """A bug (not bad input) ends with one line naming the variable that shows the traceback."""
-    import fingertip.jobs.mesh
+    import fingertip.cli.mesh
 
     def boom(*args, **kwargs):
         raise RuntimeError("unexpected\nstate")
 
-    monkeypatch.setattr(fingertip.jobs.mesh, "run_mesh", boom)
+    monkeypatch.setattr(fingertip.cli.mesh, "mesh_folder", boom)
     monkeypatch.delenv(pipeline.DEBUG_ENV, raising=False)
     code, _, err, _ = cli("mesh", "--preset", "cylinder8", "--out", tmp_path / "m")
     assert code == 1 and err.count("\n") == 1 and err.startswith("error: internal error RuntimeError")

@@ -116,7 +116,7 @@ def test_killed_worker_is_retried_and_the_run_completes(tmp_path, scene, serial,
     watcher = threading.Thread(target=kill_first_busy_worker, daemon=True)
     watcher.start()
     out = tmp_path / "cohort"
-    text = run_batch(parse_subjects(SUBJECTS), scene, out, MeshOptions(size_mm=0.25),
+    text = run_batch(parse_subjects(SUBJECTS), scene, out, MeshOptions(sizes={"size_mm": 0.25}),
                      scheduler=cluster.scheduler_address, progress=False)
     watcher.join()
     assert killed, "no worker was busy with a subject to kill"

@@ -165,7 +165,7 @@ def test_rounded_tip_too_short_for_the_layers_is_refused(tmp_path, capsys):
         cylinder_model(6.0, 5.0, layer3_mm=1.2, tip_mm=2.0)      # layer 3's dome would pass the dermis'
     err = run_bad(["--preset", "monkey", "--tip", "1"], tmp_path / "o", capsys)
     assert "use at least" in err
-    assert "--tip 'round'" in run_bad(["--preset", "monkey", "--tip", "round"], tmp_path / "o", capsys)
+    assert "--tip: 'round'" in run_bad(["--preset", "monkey", "--tip", "round"], tmp_path / "o", capsys)
     run_bad(["--preset", "monkey", "--tip", "-3"], tmp_path / "o", capsys)
 
 

@@ -1,5 +1,5 @@
-"""Thesis chapter-4 claims (fem.thesis.chapter4) on coarse 2D models, and `pipeline.py reproduce`: report, resume,
-refusals. The dorsal-half claim (3D) is pinned by tests/test_dorsal_trend.py."""
+"""Thesis chapter-4 claims (fem.thesis.chapter4_mechanics) on coarse 2D models, and `pipeline.py
+reproduce`: report, resume, refusals. The dorsal-half claim (3D) is pinned by tests/test_dorsal_trend.py."""
 import json
 
 import numpy as np
@@ -7,7 +7,7 @@ import pytest
 
 import pipeline
 from fem.thesis import claims as thesis
-from fem.thesis import chapter4 as thesis2d
+from fem.thesis import chapter4_mechanics
 from fem.thesis.findings import DIFFERS, REPRODUCED
 
 
@@ -17,7 +17,7 @@ def _by_key(findings):
 
 def test_block_with_held_sides_matches_flamant(shop):
     """Thesis 4.1: measured 4.5 % (held) and 17.5 % (free) at r = 3 mm, 60 deg, 0.25 mm mesh."""
-    (f,) = thesis2d.flamant_block(shop)
+    (f,) = chapter4_mechanics.flamant_block(shop)
     assert f.verdict == REPRODUCED and abs(f.value) < 5.0
     rows = {(r["block"], r["r_mm"], r["angle_deg"]): r["fe_over_flamant"] for r in f.table}
     assert abs(rows[("40 x 18 mm, sides free", 3.0, 60)] - 1) > 0.12          # the free-sides block is not
@@ -28,8 +28,8 @@ def test_cylinders_follow_plane_strain_hertz_not_a_square_root_law(shop):
     """Thesis 4.6: the solid model's C1 - C8 depth difference is the plane-strain Hertz value
     (measured -4.7 % at F*, -4.1 % at F*/10), a log-log slope near 0.12, not 0.5; the solid-fluid
     model is deeper for every cylinder and keeps its volume (6.7e-11 of the core's area)."""
-    runs = thesis2d.cylinder_runs(shop)
-    findings = _by_key(thesis2d.cylinder_findings(runs, shop.size_mm))
+    runs = chapter4_mechanics.cylinder_runs(shop)
+    findings = _by_key(chapter4_mechanics.cylinder_findings(runs, shop.size_mm))
     depth = findings["fig4-24_depth"]
     assert depth.verdict == DIFFERS and 0.05 < depth.value < 0.2
     for level in ("F*", "F*/10"):
@@ -45,21 +45,21 @@ def test_cylinders_follow_plane_strain_hertz_not_a_square_root_law(shop):
 
 def test_line_load_order_of_the_four_models(shop):
     """Thesis 4.7: square, semi-infinite (sides held), cylinder, cylinder with bone."""
-    (f,) = thesis2d.line_load_order(shop)
+    (f,) = chapter4_mechanics.line_load_order(shop)
     assert f.verdict == REPRODUCED
     at2 = {r["model"]: r["deflection_2mm"] for r in f.table}
     assert at2["semi-infinite, sides free"] > at2["finite square"]       # free sides would swap them
 
 
 def test_appendices(shop):
-    a, b = thesis2d.appendices(shop)
+    a, b = chapter4_mechanics.appendices(shop)
     assert a.verdict == b.verdict == REPRODUCED
     assert a.value < 0.01 and b.value < 1e-6
 
 
 def test_reproduce_writes_a_report_and_resumes(tmp_path, monkeypatch, capsys):
     out = tmp_path / "report"
-    monkeypatch.setattr(thesis, "CLAIMS", (("appendices", thesis2d.appendices),))
+    monkeypatch.setattr(thesis, "CLAIMS", (("appendices", chapter4_mechanics.appendices),))
     assert pipeline.main(["reproduce", "--quick", "--out", str(out), "--quiet"]) == 0
     md, page = (out / "index.md").read_text(), (out / "index.html").read_text()
     for text in (md, page):

@@ -2,12 +2,13 @@
 the factorised path, keys that follow every input, corrupt files rebuilt, and `prepare` + `indent`."""
 import csv
 import json
+import logging
 
 import numpy as np
 import pytest
 
 import pipeline
-from fingertip.jobs.indent import scene_of_flags
+from fem.experiments.scene import Scene
 from fem.experiments.runner import run_experiments
 from fem.io.modelfolder import read_model
 from fem.experiments.response import ResponseStore, response_key
@@ -60,7 +61,8 @@ def _assert_same(ref, run):
     ("monkey", "C5", "0.5:1.5:0.5", "perpendicular")])
 def test_stored_equals_factorised(which, indentor, depth, orientation, request):
     folder = request.getfixturevalue(which)
-    scene = scene_of_flags(indentor, orientation=orientation, depth=depth)
+    scene = Scene.from_dict({"experiment": [{"name": indentor, "indentor": indentor, "orientation": orientation,
+                                             "depth_mm": depth}]})
     ref, first, repeat = _both(folder, scene)
     assert ref.responses == [] and first.responses[0][1] == "built" and repeat.responses[0][1] == "stored"
     assert first.responses[0][0] == repeat.responses[0][0]
@@ -94,8 +96,8 @@ def test_key_follows_inputs(cyl8):
 
 
 @pytest.mark.parametrize("damage", ["truncate", "json"])
-def test_corrupt_store_is_rebuilt(cyl8, damage):
-    scene = scene_of_flags("C5", depth="0.5")
+def test_corrupt_store_is_rebuilt(cyl8, damage, caplog):
+    scene = Scene.from_dict({"experiment": [{"name": "C5", "indentor": "C5", "depth_mm": "0.5"}]})
     model, info = read_model(cyl8)
     first = run_experiments(model, info, scene, store=ResponseStore(cyl8))
     key = first.responses[0][0]
@@ -108,8 +110,9 @@ def test_corrupt_store_is_rebuilt(cyl8, damage):
         (folder / "RT.npy").write_bytes(data[:len(data) // 2])
     else:
         (folder / "response.json").write_text("{not json")
-    with pytest.warns(UserWarning, match="unreadable"):
+    with caplog.at_level(logging.WARNING, "fem.experiments.response"):
         again = run_experiments(model, info, scene, store=ResponseStore(cyl8))
+    assert "unreadable" in caplog.text
     assert again.responses[0][:2] == (key, "built")
     assert ResponseStore(cyl8).load(key) is not None
     assert _rel(obs, again.experiments[0].steps[0][1].observed) < RTOL

@@ -12,6 +12,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import least_squares
 
 from fingertip.errors import InputError
 from fem.biomech.deflection import DeflectionExperiment, Profile, as_log10, code_of, parse_code, ratio_key
@@ -60,6 +61,104 @@ def profile_residuals(exp: DeflectionExperiment, log10_Pa, data: list[Profile]) 
     return np.concatenate([m.at(p.distance_mm) - p.deflection_mm for m, p in zip(model, data)])
 
 
+def _start(exp: DeflectionExperiment, base: str, free_layers, bounds_log10, start):
+    """The checked fit set-up: base log10 moduli (n_layers,), the sorted free layers, their indices, the
+    bounds (lo, hi) and the start point (p,) inside them, all in log10 Pa (InputError if invalid)."""
+    b = parse_code(base, exp.n_layers)
+    free = tuple(sorted({int(k) for k in free_layers}))
+    if not free or any(not 1 <= k <= exp.n_layers for k in free):
+        raise InputError(f"free layers must be a non-empty subset of 1-{exp.n_layers}, got {list(free_layers)}")
+    if len(free) == exp.n_layers:
+        raise InputError("fitting every layer is degenerate (only modulus ratios change the deflections): "
+                         "hold one layer at its base value")
+    idx = np.array(free) - 1
+    lo, hi = float(bounds_log10[0]), float(bounds_log10[1])
+    if not lo < hi:
+        raise InputError(f"bounds must be low < high (log10 Pa), got {bounds_log10}")
+    x0 = np.clip(b[idx] if start is None else as_log10(start, exp.n_layers)[idx], lo + 1e-6, hi - 1e-6)
+    return b, free, idx, (lo, hi), x0
+
+
+class _Objective:
+    """The fit's residuals (fun) and forward-difference Jacobian (jac) in the free log10 moduli x,
+    for scipy's least_squares; `used` holds the ratio keys of the materials it asked for, `trials`
+    the rms (mm) of every trial point."""
+
+    def __init__(self, exp: DeflectionExperiment, data: list[Profile], base_log10: np.ndarray, idx: np.ndarray,
+                 hi: float, step_log10: float, free_layers):
+        self.exp, self.data, self.base, self.idx, self.hi, self.step = exp, data, base_log10, idx, hi, step_log10
+        self.free_layers = free_layers
+        self.depths = [p.depth_mm for p in data]
+        self.used = set()
+        self.trials = []
+
+    def full(self, x) -> np.ndarray:
+        """All five log10 moduli with the free ones at x."""
+        v = self.base.copy()
+        v[self.idx] = x
+        return v
+
+    def residuals(self, v) -> np.ndarray:
+        self.used.add(ratio_key(v))
+        return profile_residuals(self.exp, v, self.data)
+
+    def columns(self, x):
+        """(steps, points) of the forward-difference Jacobian at x (a step down at the upper bound)."""
+        steps = [self.step if v + self.step <= self.hi else -self.step for v in x]
+        shifted = [x + h * np.eye(len(x))[j] for j, h in enumerate(steps)]
+        return steps, shifted
+
+    def fun(self, x) -> np.ndarray:
+        exp = self.exp
+        if exp.map is not None:         # the trial point with its columns, in parallel
+            exp.evaluate([self.full(x)] + [self.full(xp) for xp in self.columns(x)[1]], self.depths)
+        r = self.residuals(self.full(x))
+        self.trials.append(float(np.sqrt(np.mean(r ** 2))))
+        exp.progress.note(f"fit trial {len(self.trials)}: log10 Pa of layers {list(self.free_layers)} = "
+                          f"{np.round(x, 3).tolist()}, rms {self.trials[-1]:.4g} mm, best {min(self.trials):.4g} mm "
+                          f"({len(self.used)} distinct materials solved)")
+        return r
+
+    def jac(self, x) -> np.ndarray:
+        steps, shifted = self.columns(x)
+        self.exp.evaluate([self.full(x)] + [self.full(xp) for xp in shifted], self.depths)   # the columns in parallel
+        r0 = self.residuals(self.full(x))
+        J = np.empty((len(r0), len(x)))
+        for j, (h, xp) in enumerate(zip(steps, shifted)):
+            J[:, j] = (self.residuals(self.full(xp)) - r0) / h
+        return J
+
+
+def _uncertainty(r: np.ndarray, J: np.ndarray, noise_mm: float | None):
+    """One-sigma std (p,) of the free log10 moduli, their correlation (p, p) and the rms
+    sensitivity (p,) mm per decade, from the residuals r (n,) mm and the Jacobian J (n, p)."""
+    n, p = len(r), J.shape[1]
+    s2 = noise_mm ** 2 if noise_mm is not None else float(r @ r) / max(n - p, 1)
+    JtJ = J.T @ J
+    try:
+        cov = s2 * np.linalg.inv(JtJ)
+        std = np.sqrt(np.clip(np.diag(cov), 0, None))
+        corr = cov / np.outer(std, std)
+    except np.linalg.LinAlgError:
+        std, corr = np.full(p, np.inf), np.full((p, p), np.nan)
+    sens = np.sqrt((J ** 2).mean(axis=0))
+    return std, corr, sens
+
+
+def _rounded_codes(obj: _Objective, x: np.ndarray) -> dict:
+    """{material code: rms (mm)} of the integer roundings of the free log10 moduli x (one batch)."""
+    codes = {}
+    roundings = [obj.full(np.clip(np.array(digits, float), 0, 9))
+                 for digits in itertools.product(*[sorted({math.floor(v), math.ceil(v)}) for v in x])]
+    obj.exp.evaluate(roundings, obj.depths)
+    for v in roundings:
+        code = code_of(v)
+        if code not in codes:
+            rr = obj.residuals(v)
+            codes[code] = float(np.sqrt(np.mean(rr ** 2)))
+    return codes
+
+
 def fit_material(exp: DeflectionExperiment, data: list[Profile], base: str = "m43338", free_layers=(2, 3, 4),
                  bounds_log10=(1.0, 7.0), start=None, step_log10: float = 0.02,
                  noise_mm: float | None = None) -> MaterialFit:
@@ -77,87 +176,17 @@ def fit_material(exp: DeflectionExperiment, data: list[Profile], base: str = "m4
     speculative ones). noise_mm: known measurement noise (else estimated from the residuals) for
     the uncertainty.
     """
-    from scipy.optimize import least_squares
-
-    b = parse_code(base, exp.n_layers)
-    free = tuple(sorted({int(k) for k in free_layers}))
-    if not free or any(not 1 <= k <= exp.n_layers for k in free):
-        raise InputError(f"free layers must be a non-empty subset of 1-{exp.n_layers}, got {list(free_layers)}")
-    if len(free) == exp.n_layers:
-        raise InputError("fitting every layer is degenerate (only modulus ratios change the deflections): "
-                         "hold one layer at its base value")
-    idx = np.array(free) - 1
-    lo, hi = float(bounds_log10[0]), float(bounds_log10[1])
-    if not lo < hi:
-        raise InputError(f"bounds must be low < high (log10 Pa), got {bounds_log10}")
-    x0 = np.clip(b[idx] if start is None else as_log10(start, exp.n_layers)[idx], lo + 1e-6, hi - 1e-6)
-
-    depths = [p.depth_mm for p in data]
-
-    def full(x):
-        v = b.copy()
-        v[idx] = x
-        return v
-
-    used = set()                        # ratio keys of the materials the fit asked for
-
-    def residuals(v):
-        used.add(ratio_key(v))
-        return profile_residuals(exp, v, data)
-
-    def columns(x):
-        """(steps, points) of the forward-difference Jacobian at x (a step down at the upper bound)."""
-        steps = [step_log10 if v + step_log10 <= hi else -step_log10 for v in x]
-        shifted = [x + h * np.eye(len(x))[j] for j, h in enumerate(steps)]
-        return steps, shifted
-
-    trials = []
-
-    def fun(x):
-        if exp.map is not None:         # the trial point with its columns, in parallel
-            exp.evaluate([full(x)] + [full(xp) for xp in columns(x)[1]], depths)
-        r = residuals(full(x))
-        trials.append(float(np.sqrt(np.mean(r ** 2))))
-        exp.progress.note(f"fit trial {len(trials)}: log10 Pa of layers {list(free_layers)} = "
-                          f"{np.round(x, 3).tolist()}, rms {trials[-1]:.4g} mm, best {min(trials):.4g} mm "
-                          f"({len(used)} distinct materials solved)")
-        return r
-
-    def jac(x):
-        steps, shifted = columns(x)
-        exp.evaluate([full(x)] + [full(xp) for xp in shifted], depths)     # the columns in parallel
-        r0 = residuals(full(x))
-        J = np.empty((len(r0), len(x)))
-        for j, (h, xp) in enumerate(zip(steps, shifted)):
-            J[:, j] = (residuals(full(xp)) - r0) / h
-        return J
-
-    sol = least_squares(fun, x0, jac=jac, bounds=(np.full(len(idx), lo), np.full(len(idx), hi)),
+    b, free, idx, (lo, hi), x0 = _start(exp, base, free_layers, bounds_log10, start)
+    obj = _Objective(exp, data, b, idx, hi, step_log10, free_layers)
+    sol = least_squares(obj.fun, x0, jac=obj.jac, bounds=(np.full(len(idx), lo), np.full(len(idx), hi)),
                         method="trf", x_scale=1.0, xtol=1e-6, ftol=1e-10, gtol=1e-10, max_nfev=60)
-    r = fun(sol.x)
-    J = jac(sol.x)
-    n, p = len(r), len(sol.x)
-    s2 = noise_mm ** 2 if noise_mm is not None else float(r @ r) / max(n - p, 1)
-    JtJ = J.T @ J
-    try:
-        cov = s2 * np.linalg.inv(JtJ)
-        std = np.sqrt(np.clip(np.diag(cov), 0, None))
-        corr = cov / np.outer(std, std)
-    except np.linalg.LinAlgError:
-        std, corr = np.full(p, np.inf), np.full((p, p), np.nan)
-    sens = np.sqrt((J ** 2).mean(axis=0))
-    codes = {}
-    roundings = [full(np.clip(np.array(digits, float), 0, 9))
-                 for digits in itertools.product(*[sorted({math.floor(v), math.ceil(v)}) for v in sol.x])]
-    exp.evaluate(roundings, depths)
-    for v in roundings:
-        code = code_of(v)
-        if code not in codes:
-            rr = residuals(v)
-            codes[code] = float(np.sqrt(np.mean(rr ** 2)))
+    r = obj.fun(sol.x)
+    J = obj.jac(sol.x)
+    std, corr, sens = _uncertainty(r, J, noise_mm)
+    codes = _rounded_codes(obj, sol.x)
     best = min(codes, key=codes.get)
-    return MaterialFit(full(sol.x), free, float(np.sqrt(np.mean(r ** 2))), r, std, 10.0 ** std, sens,
-                       corr, best, codes[best], codes, len(used), int(sol.nfev), sol.message)
+    return MaterialFit(obj.full(sol.x), free, float(np.sqrt(np.mean(r ** 2))), r, std, 10.0 ** std, sens,
+                       corr, best, codes[best], codes, len(obj.used), int(sol.nfev), sol.message)
 
 
 @dataclass

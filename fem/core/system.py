@@ -14,12 +14,14 @@ compliance of chosen nodes along a direction (from the factorisation's Schur com
 """
 from __future__ import annotations
 
-import warnings
+import logging
 
 import numpy as np
 import scipy.sparse as sp
 
 from fem.core.linalg import SaddleFactor
+
+logger = logging.getLogger(__name__)
 
 
 class LinearSystem:
@@ -46,8 +48,8 @@ class LinearSystem:
         x = self._factor(b)
         self.residual = self._factor.last_residual
         if self.residual > 1e-6:
-            warnings.warn(f"linear solve residual {self.residual:.1e} is large: the model is nearly "
-                          "singular or badly conditioned", stacklevel=3)
+            logger.warning(f"linear solve residual {self.residual:.1e} is large: the model is nearly "
+                           "singular or badly conditioned")
         return x
 
     def solve(self, f: np.ndarray) -> np.ndarray:
@@ -135,8 +137,8 @@ class LinearSystem:
         self.residual = f.last_residual if len(i) else 0.0
         self.refined = bool(len(i) and f.refinements > 0 and f.refine_tol == tol)
         if self.residual > 1e-6:
-            warnings.warn(f"linear solve residual {self.residual:.1e} is large: the model is nearly "
-                          "singular or badly conditioned", stacklevel=2)
+            logger.warning(f"linear solve residual {self.residual:.1e} is large: the model is nearly "
+                           "singular or badly conditioned")
         return u
 
     def displacement(self, f: np.ndarray | None = None) -> np.ndarray:

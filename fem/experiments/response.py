@@ -37,8 +37,8 @@ from __future__ import annotations
 import hashlib
 import json
 import shutil
+import logging
 import time
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -50,6 +50,9 @@ from fingertip.staging import staged_output, write_json
 from fem.contact.compliance import Compliance, DenseReach, RowCache
 from fem.contact.linear import ContactModel, fe_facets
 from fem.io.modelfolder import CONDENSE_MAX_NODES, CONTACT_REGION, HELD, held_regions
+from fem.receptors.grid import ReceptorSampler
+
+logger = logging.getLogger(__name__)
 
 RESPONSE_FORMAT = 2
 """Version of the stored layout and of what the key covers (raise it when either changes)."""
@@ -185,6 +188,14 @@ class ResponseStore:
         self.folder = Path(model_dir) / "response"
         self._mesh_sha = self._memo = None
 
+    @classmethod
+    def existing(cls, model_dir) -> ResponseStore | None:
+        """The store of a model folder that keeps response models (`prepare_responses` or an
+        earlier scene made it), else None: a first run factorises, which costs less than building
+        one (a solve per condensed candidate)."""
+        store = cls(model_dir)
+        return store if store.folder.is_dir() else None
+
     def mesh_sha256(self) -> str:
         """`mesh_sha256` of the model folder, computed once and remembered in `response/mesh.json`
         with the file's size, inode and modification time: while those are unchanged the mesh is
@@ -235,8 +246,7 @@ class ResponseStore:
             if not ok:
                 raise ValueError("shapes or key differ from response.json")
         except (OSError, ValueError, KeyError, TypeError, EOFError) as exc:
-            warnings.warn(f"stored response model {folder} is unreadable ({exc}): removed, it will be rebuilt",
-                          stacklevel=2)
+            logger.warning(f"stored response model {folder} is unreadable ({exc}): removed, it will be rebuilt")
             shutil.rmtree(folder, ignore_errors=True)
             return None
         return ResponseModel(key, np.asarray(meta["approach"], float), np.asarray(reach), WT, RT,
@@ -323,8 +333,6 @@ def stored_responses(store: ResponseStore, model, approaches, grid, touched, pro
     (one solve each), so a scene condenses what it can touch and `pipeline.py prepare` all.
     A store that cannot be written is warned about; the models built are used all the same.
     The sampler has an operator only when something was built."""
-    from fem.receptors.grid import ReceptorSampler
-
     progress = as_progress(progress)
     out, used, sampler, mesh_sha = {}, [], None, store.mesh_sha256()
     for a in approaches:
@@ -345,8 +353,8 @@ def stored_responses(store: ResponseStore, model, approaches, grid, touched, pro
             try:
                 store.save(rm)
             except OSError as exc:
-                warnings.warn(f"cannot store the response model in {store.folder} ({exc}): the next run "
-                              f"factorises again", stacklevel=2)
+                logger.warning(f"cannot store the response model in {store.folder} ({exc}): the next run "
+                               f"factorises again")
             used.append((key, "built", rm.build_seconds, rm.nbytes))
         else:
             used.append((key, "stored", rm.build_seconds, rm.nbytes))

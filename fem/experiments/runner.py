@@ -1,13 +1,16 @@
-"""The experiments of a scene on a model: plan, factorise once, indent.
+"""The experiments of a scene on a model: plan, factorise once (or answer from a stored response
+model, or run one experiment per task elsewhere), indent, and drive the afferents.
 
-    model, info = read_model("out/cyl8", scene.material, scene.nu)        # fem.io.modelfolder
-    run = run_experiments(model, info, load_scene("scenes/bars.toml"))
+    run = run_scene("out/cyl8", load_scene("scenes/bars.toml"))     # what `pipeline.py indent` runs
     for e in run.experiments:
         e.name, e.indentor, e.steps, e.seconds       # steps: [(offset (3,) mm, ContactResult)]
 
+    model, info = read_model("out/cyl8", scene.material, scene.nu)   # or on a model in memory
+    run = run_experiments(model, info, scene)
+
 Only the candidate nodes the scene's indentors can reach (`fem.contact.linear.reach`) are condensed
-when the model is factorised. No files are read or written here (`fem.io.runfolder` writes them)
-except through a given `fem.experiments.response.ResponseStore`.
+when the model is factorised. No files are written here (`fem.io.runfolder` writes them) except
+through a given `fem.experiments.response.ResponseStore`.
 """
 from __future__ import annotations
 
@@ -16,14 +19,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from fem.contact.indentors import approach_direction, make_indentor
+from fem.contact.linear import ContactModel, reach
+from fem.experiments.response import ResponseStore, contact_model, stored_responses
+from fem.experiments.scene import AXES, Experiment, Receptors, Scene
+from fem.io.modelfolder import (CONDENSE_MAX_NODES, CONTACT_REGION, approach_down, factorise, folder_dim,
+                                folder_info, read_model, receptor_surface)
+from fem.io.runfolder import writes_pvd
+from fem.receptors.afferents import scene_responses
+from fem.receptors.grid import ReceptorSampler, receptor_grid
 from fingertip.errors import InputError
 from fingertip.progress import as_progress
-from fem.contact.linear import ContactModel, reach
-from fem.contact.indentors import approach_direction, make_indentor
-from fem.io.modelfolder import CONTACT_REGION, approach_down, factorise, receptor_surface
-from fem.receptors.grid import ReceptorSampler, receptor_grid
-from fem.experiments.response import contact_model, stored_responses
-from fem.experiments.scene import AXES, Experiment, Scene
 
 
 @dataclass
@@ -46,7 +52,9 @@ class SceneRun:
     """Every experiment of a scene on one model, with what their outputs need: the contact model,
     its candidate nodes (`fem.core.model.SurfaceNodes`), the receptor grid and sampler, the measures,
     the receptor line ((axis, mm) or None), warnings about the placement and the stored response
-    models used ([(key, "stored" or "built", build seconds, bytes)], `fem.experiments.response`)."""
+    models used ([(key, "stored" or "built", build seconds, bytes)], `fem.experiments.response`) and
+    the afferents ((population, {experiment name: response}), `fem.receptors.afferents`; (None, {})
+    without [afferents])."""
     model: object
     info: dict
     scene: Scene
@@ -59,6 +67,7 @@ class SceneRun:
     experiments: list
     warnings: list
     responses: list = field(default_factory=list)
+    afferents: tuple = (None, {})
 
 
 def top_point(points, place) -> int:
@@ -210,3 +219,109 @@ def _indent_one(cm: ContactModel, run: ExperimentRun, off, load):
     if run.experiment.sweep is not None:
         return cm.sweep(run.indentor, off[None], **load)[0]
     return cm.indent(run.indentor, **load)
+
+
+# --------------------------------------------------------------------------- the scene runner
+def run_scene(model_dir, scene: Scene, store=None, map=None, progress=None) -> SceneRun:
+    """Every experiment of `scene` on a model folder, as the command line runs it (the one call
+    behind `pipeline.py indent`, `batch` and the distributed tasks).
+
+    store: the folder's `fem.experiments.response.ResponseStore`: the contact problems and receptor
+    measures are answered by its response models (built and stored when missing) unless the scene
+    needs full fields (a PVD) or afferents, which factorise. map: map(fn, items) -> [fn(item)]
+    in order (e.g. tasks on Dask workers, `fingertip.jobs.tasks.task_map`): a scene of several
+    experiments that factorises runs one task per experiment, each reading and factorising the
+    model itself, with the numbers of the run in this process. progress: a `fingertip.progress`
+    object (None: silent): notes why a store or a map is not used, and the work."""
+    progress = as_progress(progress)
+    scene.check_dim(folder_dim(folder_info(model_dir)))
+    model, info = read_model(model_dir, scene.material, scene.nu)
+    if store is not None and (why := store_blocker(scene)):
+        progress.note(f"response model: not used, {why}: factorising"
+                      + (" (--no-pvd answers from the stored response models)" if "PVD" in why else ""))
+        store = None
+    if map is not None and (why := distribution_blocker(scene, store)):
+        progress.note(f"scheduler: running the scene in this process: {why}")
+        map = None
+    if map is not None:
+        runs = map(experiment_task, [(str(model_dir), scene, k) for k in range(len(scene.experiments))])
+        run = assemble_run(model, info, scene, runs, progress)
+    else:
+        run = run_experiments(model, info, scene, progress=progress, store=store)
+    if scene.afferents is not None:
+        with progress.task("afferent inputs and spike trains", kind="afferents"):
+            run.afferents = scene_responses(run)
+    return run
+
+
+def store_blocker(scene: Scene) -> str | None:
+    """Why stored response models cannot answer a scene (None when they can)."""
+    if scene.afferents is not None:
+        return "afferents need the stresses at their own sites"
+    if any(writes_pvd(scene.output, len(e.indentations)) for e in scene.experiments):
+        return "the PVD output needs full fields"
+    return None
+
+
+def distribution_blocker(scene: Scene, store=None) -> str | None:
+    """Why a scene's experiments cannot run as separate tasks (None when they can): one
+    experiment, afferents or a PVD (they need the factorised model in this process), or a store
+    that answers without factorising."""
+    return ("it has one experiment" if len(scene.experiments) < 2 else
+            "its afferents need the factorised model in this process" if scene.afferents is not None else
+            "the stored response models answer it without factorising" if store is not None else
+            "its PVD output needs the full fields in this process (--no-pvd distributes it)"
+            if any(writes_pvd(scene.output, len(e.indentations)) for e in scene.experiments) else None)
+
+
+def experiment_task(item: tuple) -> ExperimentRun:
+    """One task of a distributed `run_scene`: item (model folder, Scene, experiment index) ->
+    its ExperimentRun with the indentations observed (the model is read where the task runs)."""
+    model_dir, scene, index = item
+    model, info = read_model(model_dir, scene.material, scene.nu)
+    return run_experiment(model, info, scene, index)
+
+
+# --------------------------------------------------------------------------- stored response models
+@dataclass
+class Prepared:
+    """What `prepare_responses` stored: the store, its key, "stored" (found) or "built", build
+    seconds and bytes, the candidates (m), the unit approach (3,), the receptor points and the
+    material code."""
+    store: ResponseStore
+    key: str
+    how: str
+    built_s: float
+    nbytes: int
+    candidates: int
+    approach: np.ndarray
+    receptor_points: int
+    material: str | None
+
+
+def prepare_responses(model_dir, material=None, nu=None, approach=None, receptors: Receptors = Receptors(),
+                      progress=None) -> Prepared:
+    """Build (or find) the response model of a model folder for a material, approach (3,) (default:
+    the model's support; a 2D model's lies in its x-y plane) and receptor grid, and store it in
+    <model>/response/<key>/, so that later scenes with the same inputs and no PVD answer without
+    factorising. Every contact candidate is condensed (InputError beyond CONDENSE_MAX_NODES)."""
+    info = folder_info(model_dir)
+    dim = folder_dim(info)
+    a = approach_down(info) if approach is None else np.asarray(approach, float) / np.linalg.norm(approach)
+    if dim == 2 and a[2] != 0:
+        raise InputError(f"approach {np.round(a, 6).tolist()}: a 2D model is indented within its x-y plane: "
+                         f"give z = 0")
+    if dim == 2:
+        a = np.array([a[0], a[1], 0.0]) / np.linalg.norm(a[:2])
+    model, info = read_model(model_dir, material, nu)
+    sn = model.surface_nodes(CONTACT_REGION[model.dim])
+    if len(sn.nodes) > CONDENSE_MAX_NODES:
+        raise InputError(f"the contact region has {len(sn.nodes)} candidates, more than the "
+                         f"{CONDENSE_MAX_NODES} a response model condenses: run `pipeline.py indent` with "
+                         f"your scene and --no-pvd, which stores one for the candidates it can touch")
+    grid = receptor_grid(*receptor_surface(model, sn), np.asarray(receptors.depths_mm, float), receptors.spacing_mm,
+                         receptor_line(receptors.line, sn, model.dim))
+    store = ResponseStore(model_dir)
+    _, _, used = stored_responses(store, model, [a], grid, np.ones(len(sn.nodes), bool), as_progress(progress))
+    key, how, built, size = used[0]
+    return Prepared(store, key, how, built, size, len(sn.nodes), a, len(grid.points_mm), model.material.code)

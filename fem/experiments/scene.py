@@ -34,10 +34,11 @@ Every key is declared once, below, with its type, unit and default (`Scene`, `Re
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
+from fingertip.declare import declared, finite, nonnegative, positive
 from fingertip.errors import InputError
 from fem.contact.linear import MAX_DEPTH_MM
 from fem.contact.indentors import orientation_deg, shapes_for
@@ -155,6 +156,17 @@ def _position(value, key, where):
     return tuple(value)
 
 
+def _position_words(words: list[str]):
+    """A position from command-line words: "top", or X Z in mm."""
+    if words == ["top"]:
+        return "top"
+    try:
+        x, z = (float(w) for w in words)
+    except ValueError:
+        raise InputError(f"--position {' '.join(words)}: give X Z in mm or top") from None
+    return (x, z)
+
+
 def _vector3(value, key, where):
     if (not isinstance(value, (list, tuple, np.ndarray)) or len(value) != 3
             or not all(isinstance(v, (int, float, np.floating)) and not isinstance(v, bool) for v in value)):
@@ -194,11 +206,12 @@ def _finite(values, key, where, low=None, strict=False):
         raise InputError(f"{where} {key} must be {want}, got {shown!r}")
 
 
-def _key(unit: str, parse, default=None, doc: str = "", toml: str | None = None):
-    """A scene key: its unit, parser (value, key, table) -> typed value, default and meaning."""
+def _key(unit: str, parse, default=None, doc: str = "", toml: str | None = None, **cli):
+    """A scene key (`fingertip.declare.declared`): its unit, TOML parser (value, key, table) ->
+    typed value, default (a callable: a factory) and meaning; cli: how the command line reads it
+    (text, flag, default_text)."""
     factory = default if callable(default) else None
-    kw = {"default_factory": factory} if factory else {"default": default}
-    return field(**kw, metadata={"unit": unit, "parse": parse, "doc": doc, "toml": toml})
+    return declared(None if factory else default, unit, doc, factory=factory, parse=parse, toml=toml, **cli)
 
 
 def _toml_name(f) -> str:
@@ -224,9 +237,13 @@ def _parse_table(cls, table, where: str, **given):
 @dataclass(frozen=True)
 class Receptors:
     """[receptors]: where receptor points lie and what is measured there."""
-    depths_mm: tuple = _key("mm", _values, lambda: tuple(DEFAULT_DEPTHS_MM), "depths below the surface")
-    spacing_mm: float = _key("mm", _number, 1.0, "spacing of the receptor sites")
-    line: tuple | None = _key("[axis, mm | 'middle']", _line, None, "sites on the plane x[axis] = value only")
+    depths_mm: tuple = _key("mm", _values, lambda: tuple(DEFAULT_DEPTHS_MM), "receptor depths below the surface",
+                            text=str, flag="--receptor-depths")
+    spacing_mm: float = _key("mm", _number, 1.0, "spacing of the receptor sites", text=positive,
+                             flag="--receptor-spacing")
+    line: tuple | None = _key("[axis, mm | 'middle']", _line, None,
+                              "receptors only on the plane x[axis] = value: z=<mm>, z=middle or x=<mm>",
+                              text=lambda word: list(word.partition("=")[::2]), default_text="the whole pad")
     measures: tuple = _key("", _names, lambda: tuple(DEFAULT_MEASURES), "fem.core.measures names")
 
     @classmethod
@@ -244,7 +261,8 @@ class Receptors:
 @dataclass(frozen=True)
 class Output:
     """[output]: optional files of the run folder."""
-    pvd: bool | None = _key("", _boolean, None, "full fields per indentation (None: up to 20 indentations)")
+    pvd: bool | None = _key("", _boolean, None, "full fields per indentation as a PVD series",
+                            default_text="on up to 20 indentations")
     plots: bool = _key("", _boolean, True, "PNG figures per experiment")
 
     @classmethod
@@ -314,17 +332,27 @@ class Afferents:
 class Experiment:
     """[[experiment]]: one indentor, placed, at depths or a force, possibly swept."""
     name: str = _key("", _text, None, "file stem of its outputs (default experiment<k>)")
-    indentor: str = _key("", _text, None, "fem.contact.indentors code, e.g. C5, bar:1.5, step:3")
-    orientation: str | float = _key("deg", _orientation, "parallel", "length axis: parallel, perpendicular or deg")
-    position_mm: tuple | str | None = _key("mm", _position, None,
-                                           '[x, z], [x, y, z] or "top" (None: x = 0 at the middle of the pad)')
-    incline_deg: float | None = _key("deg", _number, None, "finger incline (fem.contact.indentors.approach_direction)")
+    indentor: str = _key("", _text, None, "indentor code: C1-C8, R1-R2, cylinder:<d>, step:0-5, bar:<w>, "
+                         "grating:<bar>[:<gaps>], wedge, cone, punch, plate, sphere:<r>, ellipsoid:<a,b,c>, "
+                         "two-point:<separation> (fem.contact.indentors)", text=str)
+    orientation: str | float = _key("deg", _orientation, "parallel", "indentor length axis: parallel or perpendicular "
+                                    "to the finger axis, or an angle in degrees (2D models need parallel)",
+                                    text=str, flag=("--axis", "--orientation"))
+    position_mm: tuple | str | None = _key("mm", _position, None, "indentor position on the pad: [x, z], [x, y, z] "
+                                           'or "top", the pad point highest against the approach',
+                                           words=_position_words, nargs="+",
+                                           default_text="x = 0 at the middle of the pad")
+    incline_deg: float | None = _key("deg", _number, None, "finger incline (fem.contact.indentors.approach_direction)",
+                                     text=finite, default_text="the model's support")
     approach: tuple | None = _key("", _vector3, None, "direction of travel (default: the model's support)")
-    depth_mm: tuple | None = _key("mm", _values, None, "depths beyond first touch")
-    force_N: float | None = _key("N", _number, None, "total force (N/mm in 2D); the depth is solved for")
-    equal_force: bool = _key("", _boolean, False, "with force_N: every part carries force_N")
-    max_depth_mm: float = _key("mm", _number, MAX_DEPTH_MM, "depth limit of force control")
-    sweep: tuple | None = _key("axis=start:stop:step mm", _sweep, None, "(axis index, offsets mm) of the sweep")
+    depth_mm: tuple | None = _key("mm", _values, None, "depths beyond first touch: start:stop:step or a list "
+                                  "(e.g. 0:3:0.5)", text=str)
+    force_N: float | None = _key("N", _number, None, "total force (N/mm in 2D); the depth is solved for",
+                                 text=positive)
+    equal_force: bool = _key("", _boolean, False, "with a force: every part of a two-point indentor carries it")
+    max_depth_mm: float = _key("mm", _number, MAX_DEPTH_MM, "depth limit of force control", text=positive)
+    sweep: tuple | None = _key("mm", _sweep, None, "move the indentor: x=start:stop:step or z=start:stop:step",
+                               text=str)
     trace: Trace | None = _key("", None, None, "[experiment.trace]: time course of the depth or force")  # noqa: RUF009
 
     @classmethod
@@ -414,9 +442,10 @@ class Experiment:
 class Scene:
     """A scene: material overrides, receptors, outputs and the experiments, in order."""
     experiments: tuple = _key("", None, tuple, "[[experiment]] tables", toml="experiment")
-    material: str | tuple | None = _key("", _material, None, "material code, or moduli per layer in MPa "
-                                                           "(default: the model's)")
-    nu: float | None = _key("", _number, None, "Poisson ratio (default: the model's)")
+    material: str | tuple | None = _key("", _material, None, "material code mABCDE (digit k: log10 of layer k's "
+                                        "modulus in Pa), or moduli per layer in MPa", text=str,
+                                        default_text="the model's")
+    nu: float | None = _key("", _number, None, "Poisson ratio", text=nonnegative, default_text="the model's")
     receptors: Receptors = _key("", lambda v, key, where: Receptors.from_dict(v), Receptors, "[receptors]")  # noqa: RUF009
     output: Output = _key("", lambda v, key, where: Output.from_dict(v), Output, "[output]")  # noqa: RUF009
     afferents: Afferents | None = _key("", lambda v, key, where: Afferents.from_dict(v), None, "[afferents]")  # noqa: RUF009

@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fingertip.declare import declared, finite, nonnegative, positive
 from fingertip.errors import InputError
 from fem.geometry.presets import FINGERTIP_PRESETS, make_shape
 
@@ -53,6 +54,31 @@ def check_positive(obj, *names: str) -> None:
             raise InputError(f"{name} must be > 0 (got {getattr(obj, name)})")
 
 
+def parse_profile(text: str | None):
+    """A bone profile in words, 's:ratio,s:ratio,...' -> ((s, ratio), ...) (None -> None);
+    ValueError for other words."""
+    if text is None:
+        return None
+    try:
+        rows = tuple(tuple(float(v) for v in item.split(":")) for item in text.split(","))
+    except ValueError:
+        raise ValueError(f"'{text}': expected 's:ratio,...' numbers, e.g. 0:0.25,1:0.18") from None
+    if any(len(r) != 2 for r in rows):
+        raise ValueError(f"'{text}': each item is s:ratio, e.g. 0:0.25,1:0.18")
+    return rows
+
+
+def parse_tip(text: str):
+    """The distal end in words: 'flat' -> 0.0, 'rounded' -> None (the data's length), a number ->
+    that dome length in mm; ValueError for other words."""
+    if text in ("flat", "rounded"):
+        return 0.0 if text == "flat" else None
+    try:
+        return float(text)
+    except ValueError:
+        raise ValueError(f"'{text}': use flat, rounded or a dome length in mm, e.g. 6.5") from None
+
+
 @dataclass(frozen=True)
 class ModelParams:
     """Every parameter of the layered model. Lengths in mm, angles in degrees.
@@ -76,21 +102,33 @@ class ModelParams:
         sections beyond the body).
     """
 
-    epidermis_mm: float = 0.5
-    dermis_mm: float = 1.0
-    layer3_mm: float | None = None
-    layer3_scale: float | None = None
-    bone_diameter_mm: float = 2.0
-    bone_profile: tuple | None = None
-    bone_offset_mm: float | None = None
-    nail_span_deg: float = 120.0
-    nail_z_frac: tuple = (0.3, 1.0)
-    support_span_deg: float = 90.0
-    support_z_frac: tuple = (0.0, 0.3)
-    support_incline_deg: float = 0.0
+    epidermis_mm: float = declared(0.5, "mm", "epidermis thickness", text=positive)
+    dermis_mm: float = declared(1.0, "mm", "dermis thickness", text=positive)
+    layer3_mm: float | None = declared(None, "mm", "layer 3 volar thickness at the reference sections; sets the "
+                                       "thesis scale factor", text=positive, default_text="presets human 1.5, monkey 0.55; "
+                                       "sections.json by section width, see model.json size_defaults")
+    layer3_scale: float | None = declared(None, "", "the layer-3 scale factor f3 directly (0-1; overrides layer3)",
+                                          text=positive)
+    bone_diameter_mm: float = declared(2.0, "mm", "bone width at the middle reference section", text=positive)
+    bone_profile: tuple | None = declared(None, "", "bone width / section width along the length, 's:ratio,...' "
+                                          "with s in [0, 1] from proximal to distal, e.g. 0:0.25,1:0.18",
+                                          text=parse_profile, default_text="constant")
+    bone_offset_mm: float | None = declared(None, "mm", "bone shift towards the nail (-y)", text=nonnegative,
+                                            default_text="presets human 1.0, monkey 0.15; sections.json by width")
+    nail_span_deg: float = declared(120.0, "deg", "nail region angular span", text=positive)
+    nail_z_frac: tuple = declared((0.3, 1.0), "", "nail region as fractions of the length (LO HI)", text=finite,
+                                  nargs=2)
+    support_span_deg: float = declared(90.0, "deg", "support region angular span", text=positive)
+    support_z_frac: tuple = declared((0.0, 0.3), "", "support region as fractions of the length (LO HI)",
+                                     text=finite, nargs=2)
+    support_incline_deg: float = declared(0.0, "deg", "support plane angle to the horizontal, positive with the "
+                                          "distal end lower (-30: the thesis platform, distal end up)", text=finite)
     volar_span_deg: float = 180.0
     n_theta: int = 64
-    tip_mm: float | None = 0.0
+    tip_mm: float | None = declared(0.0, "mm", "distal end: flat (a cut, as the thesis), rounded (every layer "
+                                    "wraps round a dome as long as the data's tip: the preset's cap, the sections "
+                                    "beyond the body), or the dome length in mm", text=parse_tip,
+                                    default_text="flat")
 
     def check(self) -> None:
         """Raise InputError for impossible values."""

@@ -18,6 +18,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from fingertip.declare import declared, positive
 from fingertip.errors import InputError
 from fingertip.progress import as_progress
 from fingertip.staging import staged_output, write_json
@@ -32,10 +33,10 @@ class Sizing2D:
     """size_mm in the top fine_depth_mm under the contact surface, growing by `growth` mm per mm
     of distance from that zone up to coarse_mm (also capped by each layer's thinnest part)."""
 
-    size_mm: float = 0.125
-    coarse_mm: float = 1.0
-    growth: float = 0.5
-    fine_depth_mm: float = 1.0
+    size_mm: float = declared(0.125, "mm", "target edge length on the volar skin (3D) or top surface (2D)", text=positive)
+    coarse_mm: float = declared(1.0, "mm", "largest edge length", text=positive)
+    growth: float = declared(0.5, "mm per mm", "edge length growth per mm away from the fine zone", text=positive)
+    fine_depth_mm: float = declared(1.0, "mm", "depth of the fine zone below the volar (3D) or top (2D) surface", text=positive)
 
     def check(self) -> None:
         from fem.geometry.mesh3d import check_sizes

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fingertip.declare import declared, positive
 from fingertip.errors import InputError
 from fingertip.progress import as_progress, cache_root
 from fingertip.staging import atomic_write, staged_output, write_json
@@ -41,10 +42,10 @@ class Sizing:
     optimisation passes.
     """
 
-    size_mm: float = 0.5
-    coarse_mm: float = 3.0
-    growth: float = 0.5
-    fine_depth_mm: float = 1.5
+    size_mm: float = declared(0.5, "mm", "target edge length on the volar skin (3D) or top surface (2D)", text=positive)
+    coarse_mm: float = declared(3.0, "mm", "largest edge length", text=positive)
+    growth: float = declared(0.5, "mm per mm", "edge length growth per mm away from the fine zone", text=positive)
+    fine_depth_mm: float = declared(1.5, "mm", "depth of the fine zone below the volar (3D) or top (2D) surface", text=positive)
     fine_z_frac: tuple = (0.0, 1.0)
     epsilon_mm: float = 0.02
     opt_iter: int = 20

@@ -8,8 +8,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fem.biomech.deflection import DeflectionExperiment, cylinder_series, layer_study, side_profile
+from fem.biomech.line_load import compare_line_load
+from fem.contact.indentors import STEP_HALF_WAVELENGTH_MM, make_indentor
+from fem.contact.linear import ContactModel, reach
+from fem.geometry.layered import model_from_args, params_for
+from fem.geometry.mesh2d import section_domain
+from fem.io.modelfolder import CONTACT_REGION, approach_down, factorise, open_model, read_model
+from fem.receptors.grid import ReceptorGrid, ReceptorSampler
+from fem.thesis.chapter4_receptors import BAR_WIDTH_MM
 from fem.thesis.findings import DIFFERS, REPRODUCED, Finding, Series, Workshop
-from fem.thesis.chapter4 import BAR_WIDTH_MM
 
 
 # ----------------------------------------------------------------------------- 6.2.1: dorsal half
@@ -18,11 +26,6 @@ def dorsal_ratios(model_dir, preset: str, depths_mm) -> list[tuple[float, float,
     folder: (largest |u_y| on the outer surface below the section centroid, over all nodes with
     y < 0, on the proximal cut, on the distal cut), each over the largest |u_y| (the depth).
     preset: the 3D preset the folder was meshed from ('human' or 'monkey')."""
-    from fem.contact.linear import ContactModel
-    from fem.contact.indentors import make_indentor
-    from fem.geometry.layered import model_from_args, params_for
-    from fem.io.modelfolder import open_model
-
     model, system, region, _ = open_model(model_dir)
     cm = ContactModel.from_fe(model, system, region)
     z = cm.points_mm[:, 2]
@@ -87,9 +90,6 @@ def layer2_change(lo, hi, reach_mm: float = 3.0) -> tuple[float, list[float]]:
 def _line_profile(folder, code: str, large_deformation: bool):
     """distance [mm] -> deflection [mm] under a prescribed nodal line 2 mm deep (the surface
     vertex at the section's centre pushed down and held sideways; both sides averaged)."""
-    from fem.biomech.deflection import side_profile
-    from fem.biomech.line_load import compare_line_load
-
     c = compare_line_load(folder, depths_mm=(2.0,), material=code, large_deformation=large_deformation)
     d, w = side_profile(c.distance_mm, (c.deflection_nonlinear_mm if large_deformation else c.deflection_linear_mm)[0])
     return lambda x: np.interp(x, d, w)
@@ -98,9 +98,6 @@ def _line_profile(folder, code: str, large_deformation: bool):
 def monkey_section(z_mm: float, **skin):
     """fem.geometry.mesh2d.Domain2D: the monkey preset's five-layer cross-section at z_mm; skin: optional
     epidermis_mm, dermis_mm (default thesis 6.1's 0.5 and 1.0 mm)."""
-    from fem.geometry.mesh2d import section_domain
-    from fem.geometry.layered import model_from_args, params_for
-
     return section_domain(model_from_args(None, "monkey", params_for("monkey", **skin)), z_mm)
 
 
@@ -109,12 +106,11 @@ def layer2_reasons(shop: Workshop) -> dict:
     thesis's prescribed nodal line instead of the wedge (linear, and neo-Hookean on 0.25 mm
     elements: a node pushed 2 mm into 0.125 mm elements inverts them before the depth), and a
     thin skin (THIN_SKIN_MM) under the wedge."""
-    from fem.biomech.deflection import DeflectionExperiment
-
     out = {"2D section, nodal line": layer2_change(
         *(_line_profile(shop.folder("monkey_section", monkey_section(5.0)), code, False) for code in LAYER2_CODES))}
     coarse = shop.folder("monkey_section", monkey_section(5.0), size_mm=0.25)
-    out["2D section, nodal line, neo-Hookean"] = layer2_change(*(_line_profile(coarse, code, True) for code in LAYER2_CODES))
+    out["2D section, nodal line, neo-Hookean"] = layer2_change(
+        *(_line_profile(coarse, code, True) for code in LAYER2_CODES))
     epi, der = THIN_SKIN_MM
     thin = shop.folder(f"monkey_section_skin{epi:g}+{der:g}", monkey_section(5.0, epidermis_mm=epi, dermis_mm=der))
     exp = DeflectionExperiment(thin, progress=shop.progress)
@@ -127,8 +123,6 @@ def layer_effects(shop: Workshop) -> list[Finding]:
     load (a wedge across the finger), on the 3D monkey preset and on its five-layer cross-section
     at z = 5 mm (2D, plane strain). Layer 2's sense is then measured on the section under the
     thesis's load (a prescribed nodal line, linear and neo-Hookean) and with a thinner skin."""
-    from fem.biomech.deflection import DeflectionExperiment, layer_study
-
     folders = {"3D monkey": shop.preset("monkey"), "2D section": shop.folder("monkey_section", monkey_section(5.0))}
     d = np.linspace(0.0, 3.5, 36)
     series, table, change, eff = [], [], {}, {}
@@ -158,6 +152,8 @@ def layer_effects(shop: Workshop) -> list[Finding]:
             return f"{what} not measured ({sense[label]})"
         kept = np.sign(change[label][0]) == np.sign(near)
         return f"{'not ' if kept else ''}{what} ({sense[label]}{'' if kept else ': this turns the sense'})"
+    large = candidate("2D section, nodal line, neo-Hookean",
+                      "large deformation, the same line neo-Hookean on 0.25 mm elements")
     return [Finding(
         "fig6-10_layers", "6.2.1, figure 6-10", "Effect of each layer's stiffness on the line-load profile",
         "Within about 1.25 mm of a 2 mm line load a stiffer layer 2 deflects more, beyond it less; "
@@ -171,7 +167,7 @@ def layer_effects(shop: Workshop) -> list[Finding]:
         f"({e2[3].most_affected_mm:.2f}, {e2[4].most_affected_mm:.2f} mm in 2D; thesis 1.3 and 2.0 mm). "
         f"Measured reason for layer 2: {candidate('2D section', 'the plane-strain assumption')}; on the "
         f"section, {candidate('2D section, nodal line', 'the load, the prescribed nodal line of the thesis')}; "
-        f"{candidate('2D section, nodal line, neo-Hookean', 'large deformation, the same line neo-Hookean on 0.25 mm elements')}. "
+        f"{large}. "
         + (f"It is the skin's thickness: with a {epi:g} mm epidermis and {der:g} mm dermis the sense "
            f"turns to the thesis's ({sense[THIN_LABEL]}; more deflection between the two, the thesis's "
            f"crossover is 1.25 mm). Under the 1.5 mm skin of an 8.6 mm wide section layer 2 acts as "
@@ -208,10 +204,6 @@ def indent_3d(folder, material: str, indentor: str, depth_mm: float, **place) ->
     `material`, placed by `place` (fem.contact.indentors.place; default approach: the folder's support,
     default position: x = 0 at the middle of the pad);
     only the candidates it can reach are condensed."""
-    from fem.contact.linear import ContactModel, reach
-    from fem.contact.indentors import make_indentor
-    from fem.io.modelfolder import CONTACT_REGION, approach_down, factorise, read_model
-
     model, info = read_model(folder, material=material)
     sn = model.surface_nodes(CONTACT_REGION[3])
     place.setdefault("approach", list(approach_down(info)))
@@ -227,8 +219,6 @@ def section_receptors(section, x_mm, depth_mm: float, z_mm: float | None = None)
     """fem.receptors.grid.ReceptorGrid of points `depth_mm` below the volar outer curve of a section
     (fem.geometry.mesh2d.section_domain) at x_mm (k,), along the curve's inward normal; in the section's
     plane (2D) or, with z_mm, at that z of the 3D model."""
-    from fem.receptors.grid import ReceptorGrid
-
     x = np.asarray(x_mm, float)
     ring = section.curves[0]
     upper = ring[ring[:, 1] > section.params["centroid_mm"][1]]
@@ -244,16 +234,12 @@ def section_receptors(section, x_mm, depth_mm: float, z_mm: float | None = None)
 
 def sample(model, u, grid, names=("sed_MPa", "max_compressive_strain")) -> dict:
     """{measure: (n,)} of displacement u (ndof,) at a receptor grid's points."""
-    from fem.receptors.grid import ReceptorSampler
-
     s = ReceptorSampler(model, grid)
     return s.measures(s.operator @ u, list(names))
 
 
 def _section_cells(shop: Workshop, name: str, section):
     """(centroids (m, 2) mm, areas (m,) mm^2) of the triangles of a section's 2D mesh."""
-    from fem.io.modelfolder import read_model
-
     model, _ = read_model(shop.folder(name, section))
     p, t = model.mesh.p, model.mesh.t[:3]
     a, b, c = (p[:, t[k]] for k in range(3))
@@ -327,7 +313,8 @@ def bars_3d(shop: Workshop) -> list[Finding]:
         f"within 5 points of the thesis's 85 %).", "threshold, fraction of the maximum SED",
         "fraction of the section below it", cumulative, rows),
         Finding(
-        "sec7-1-2_gradual", "7.1.2, figure 7-4", "Surface deformation beside a bar, homogeneous against stiff epidermis",
+        "sec7-1-2_gradual", "7.1.2, figure 7-4",
+        "Surface deformation beside a bar, homogeneous against stiff epidermis",
         "Model m33338 deforms 'elastically', with sharp changes of vertical displacement at the bar "
         "as in the 2D models; the surface deformation of m43338 is more gradual (a stiffer outer "
         "layer spreads the deformation and widens the contact).",
@@ -343,8 +330,6 @@ def bars_3d(shop: Workshop) -> list[Finding]:
 def _cell_grid(centroids, z_mm: float):
     """ReceptorGrid at the section's cell centroids (m, 2) placed at z_mm of the 3D model (no
     depth: nothing is moved off a layer interface)."""
-    from fem.receptors.grid import ReceptorGrid
-
     pts = np.column_stack([centroids, np.full(len(centroids), z_mm)])
     return ReceptorGrid(pts, np.zeros(len(pts)), np.arange(len(pts)), pts)
 
@@ -354,8 +339,6 @@ def sections_2d_3d(shop: Workshop) -> list[Finding]:
     """Thesis 7.1.1 (figures 7-2, 7-3): the 1.5 mm bar 1 mm into the 3D monkey model (m33338)
     against the same bar on the plane-strain section of the model through the point it touched first, and
     a section 2 mm from it. Receptors 0.75 mm below the surface."""
-    from fem.contact.indentors import make_indentor
-
     folder = shop.preset("monkey")
     run = indent_3d(folder, "m33338", f"bar:{BAR_WIDTH_MM}", BAR_DEPTH_MM, orientation="parallel")
     z = run.contact.points_mm[:, 2]
@@ -440,8 +423,6 @@ def contact_vs_diameter(shop: Workshop) -> list[Finding]:
     force taking C4 1 mm deep): contact radius up, peak pressure down with the cylinder's radius.
     Thesis 5.2 (figure 5-14, in vivo human fingertips): at a fixed depth the contact area grows
     with the cylinder's diameter, linearly at small depths; on the 3D human preset (1 mm elements)."""
-    from fem.biomech.deflection import DeflectionExperiment, cylinder_series
-
     def experiment(folder):          # 3D default placement: across the finger, middle of the pad
         return DeflectionExperiment(folder, indentor="cylinder:C4", progress=shop.progress)
 
@@ -502,11 +483,6 @@ def steps_3d(shop: Workshop) -> list[Finding]:
     """Thesis 6.3.3 (figure 6-39): step 5 (a 0.5 mm half-sinusoid rise over 3.134 mm, its edge
     along the finger) stepped across the 3D monkey pad at constant force (the force taking the
     step's lower flat STEP_DEPTH_MM deep, m43338): contact area against peak pressure at each position."""
-    from fem.contact.linear import ContactModel, reach
-    from fem.contact.indentors import STEP_HALF_WAVELENGTH_MM, make_indentor
-    from fem.io.modelfolder import CONTACT_REGION, approach_down, factorise, read_model
-    from fem.receptors.grid import ReceptorSampler
-
     model, info = read_model(shop.preset("monkey"), material="m43338")
     sn = model.surface_nodes(CONTACT_REGION[3])
     L = STEP_HALF_WAVELENGTH_MM[5]
@@ -523,10 +499,12 @@ def steps_3d(shop: Workshop) -> list[Finding]:
     cm = ContactModel.from_fe(model, factorise(model, info, sn.nodes[near], shop.progress), CONTACT_REGION[3],
                               observe=sampler.operator)
     force = cm.indent(steps[-1], depth_mm=STEP_DEPTH_MM).total_force_N    # the lower flat alone under the pad
-    results = [cm.indent(ind, force_N=force) for ind in shop.progress.bar(steps, desc="step 5 across the pad", unit="position")]
+    results = [cm.indent(ind, force_N=force)
+               for ind in shop.progress.bar(steps, desc="step 5 across the pad", unit="position")]
     area = np.array([r.contact_area_mm2 for r in results])
     pressure = np.array([1e3 * r.max_pressure_MPa for r in results])
-    at_v = [float(cm.points_mm[np.argmax(r.pressure_MPa), 0] - x) for r, x in zip(results, positions)]   # where on the step it peaks
+    # where on the step it peaks
+    at_v = [float(cm.points_mm[np.argmax(r.pressure_MPa), 0] - x) for r, x in zip(results, positions)]
     sed = np.array([sampler.measures(r.observed, ["sed_MPa"])["sed_MPa"] for r in results])   # (positions, receptors)
     rho = _rank_correlation(area, pressure)
     # the pad's top at x = x_top is over the step's convex half (v in [0, L/2]) for datums in
@@ -534,7 +512,8 @@ def steps_3d(shop: Workshop) -> list[Finding]:
     x_top = float(sn.x[np.argmax(sn.x @ -down), 0])
     x_min, x_max = float(positions[np.argmin(area)]), float(positions[np.argmax(area)])
     margin = 0.5
-    ok_places = (x_top - L / 2 - margin <= x_min <= x_top + margin) and (x_top - L - margin <= x_max <= x_top - L / 2 + margin)
+    ok_places = ((x_top - L / 2 - margin <= x_min <= x_top + margin)
+                 and (x_top - L - margin <= x_max <= x_top - L / 2 + margin))
     k = int(np.argmax(pressure))
     rows = [{"step_position_mm": float(x), "contact_area_mm2": float(a), "max_pressure_kPa": float(p),
              "peak_at_v_mm": v} for x, a, p, v in zip(positions, area, pressure, at_v)]
@@ -544,7 +523,8 @@ def steps_3d(shop: Workshop) -> list[Finding]:
              f"the rise's convex half for datums {x_top - L / 2:+.2f} to {x_top:+.2f} mm and its concave half "
              f"for {x_top - L:+.2f} to {x_top - L / 2:+.2f} mm")
     return [Finding(
-        "fig6-39_step_extremes", "6.3.3, figure 6-39", "Where the contact is smallest and largest as step 5 crosses the pad (3D monkey)",
+        "fig6-39_step_extremes", "6.3.3, figure 6-39",
+        "Where the contact is smallest and largest as step 5 crosses the pad (3D monkey)",
         "At constant force the contact area is smallest under the step's convex curvature and "
         "largest when its concave part is over the fingertip.",
         "datum of the smallest contact minus the pad's top [mm]", None, x_min - x_top,

@@ -1,11 +1,13 @@
 """The source thesis's claims (chapters 4-7) in thesis order, as run by `pipeline.py reproduce`
-(commands/reproduce.py): each is a function of a `fem.thesis.findings.Workshop` returning `Finding`s;
-fem.thesis.chapter4 holds chapter 4 and the appendices, fem.thesis.chapters5_7 chapters 5-7.
+(fingertip/jobs/reproduce.py): each is a function of a `fem.thesis.findings.Workshop` returning `Finding`s;
+fem.thesis.chapter4_mechanics (4.1, 4.6, 4.7 and the appendices), fem.thesis.chapter4_receptors (4.2-4.4) and
+fem.thesis.chapter4_gratings (4.5) hold chapter 4, fem.thesis.chapters5_7 chapters 5-7.
 """
 from __future__ import annotations
 
-from fem.thesis.chapter4 import (aperiodic_gratings, appendices, cylinders, flamant_block, gap_detection, line_load_order,
-                          point_load_fields, rectangular_bars, two_point_resolution)
+from fem.thesis.chapter4_gratings import aperiodic_gratings, gap_detection
+from fem.thesis.chapter4_mechanics import appendices, cylinders, flamant_block, line_load_order
+from fem.thesis.chapter4_receptors import point_load_fields, rectangular_bars, two_point_resolution
 from fem.thesis.chapters5_7 import bars_3d, contact_vs_diameter, dorsal_half, layer_effects, sections_2d_3d, steps_3d
 
 #: (name, function, what it needs) in thesis order; `pipeline.py reproduce` runs them all.

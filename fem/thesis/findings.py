@@ -12,7 +12,13 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
+from fem.contact.linear import ContactModel
 from fem.core.materials import Material
+from fem.geometry import mesh2d
+from fem.geometry.layered import model_from_args, params_for
+from fem.geometry.mesh3d import Sizing, run_mesh
+from fem.io.modelfolder import CONTACT_REGION, factorise, read_model
+from fingertip.progress import as_progress
 
 REPRODUCED, DIFFERS = "reproduced", "differs"
 
@@ -79,8 +85,6 @@ class Workshop:
               "block_free": ("rectangle_domain", ("block_free", 40.0, 18.0), {"held_sides": False})}
 
     def __init__(self, root, quick: bool, progress=None):
-        from fingertip.progress import as_progress
-
         self.root, self.quick, self.progress = Path(root), bool(quick), as_progress(progress)
 
     @property
@@ -88,15 +92,11 @@ class Workshop:
         return 0.25 if self.quick else 0.125
 
     def sizing(self, size_mm: float | None = None):
-        from fem.geometry.mesh2d import Sizing2D
-
-        return Sizing2D(size_mm=self.size_mm if size_mm is None else float(size_mm))
+        return mesh2d.Sizing2D(size_mm=self.size_mm if size_mm is None else float(size_mm))
 
     def folder(self, name: str, domain=None, size_mm: float | None = None) -> Path:
         """Model folder `name` (one of MODELS, or any name with its `domain`), meshed if absent;
         size_mm: element size in the top 1 mm when not this workshop's (folder `name_<size>mm`)."""
-        from fem.geometry import mesh2d
-
         size = self.size_mm if size_mm is None else float(size_mm)
         out = self.root / (name if size == self.size_mm else f"{name}_{size:g}mm")
         if not (out / "model.json").is_file():
@@ -109,9 +109,6 @@ class Workshop:
     def preset(self, preset: str, size_mm: float | None = None) -> Path:
         """3D model folder of a preset ('human' or 'monkey') with `size_mm` volar elements
         (default: 1.0 mm when quick, else 0.5 mm), meshed if absent."""
-        from fem.geometry.mesh3d import Sizing, run_mesh
-        from fem.geometry.layered import model_from_args, params_for
-
         size = (1.0 if self.quick else 0.5) if size_mm is None else float(size_mm)
         out = self.root / (f"{preset}_3d" if size == 1.0 else f"{preset}_3d_{size:g}mm")
         if not (out / "model.json").is_file():
@@ -121,8 +118,5 @@ class Workshop:
 
     def contact_model(self, name: str, material="m33338", rigid_bone: bool = False):
         """(fem.contact.linear.ContactModel, Model) of model folder `name`, factorised."""
-        from fem.contact.linear import ContactModel
-        from fem.io.modelfolder import CONTACT_REGION, factorise, read_model
-
         model, info = read_model(self.folder(name), material=Material(material, rigid_bone=rigid_bone))
         return ContactModel.from_fe(model, factorise(model, info), CONTACT_REGION[model.dim]), model

@@ -73,8 +73,8 @@ def run_analyze(results, neural_csv, out_dir=None, diameters_mm=None, measures=N
     out = check_output_dir(out_dir if out_dir else Path(results[0]) / "analysis")
     runs = as_runs([IndentRun(r, None if diameters_mm is None else diameters_mm[i]) for i, r in enumerate(results)])
     neural = read_neural_csv(neural_csv)
-    cands = [m.strip() for m in measures.split(",") if m.strip()] if measures else None
-    fit = [s.strip() for s in fit_on.split(",") if s.strip()] if fit_on else None
+    cands = list(measures) if measures else None
+    fit = list(fit_on) if fit_on else None
     res = analyze(runs, neural, cands, fit, receptor_x_mm, orientation)
     names = write_report(out, runs, neural, res)
     lines = [f"receptor analysis in {out}: {', '.join(names)}"]

@@ -1,8 +1,8 @@
-"""Back end of `pipeline.py batch`: a cohort of subjects, each reconstruct -> mesh -> scene, in this
-process or on Dask (fingertip.distribute), then `summary.csv` and `cohort.png` comparing them.
+"""The `batch` job: a cohort of subjects, each reconstruct -> mesh -> scene, in this process or on
+Dask (fingertip.distribute), then `summary.csv` and `cohort.png` comparing them.
 
     subjects = parse_subjects(["preset:cylinder8:bone", "scans/s01", "out/s02"])   # checks, reads no pixels
-    text = run_batch(subjects, "scenes/bars.toml", "out/cohort", scheduler="local:2")
+    text = run_batch(subjects, "scenes/bars.toml", "out/cohort", sizes={"size_mm": 1.0}, scheduler="local:2")
 
 A SUBJECT is a turntable folder (reconstructed first), a folder with sections.json (or the file),
 or `preset:NAME` (3D human, monkey; 2D block, square, cylinder8, cylinder16, the cylinders with a
@@ -13,20 +13,27 @@ one subject; it reads and writes only its own folder under DIR, which workers mu
 """
 from __future__ import annotations
 
-import contextlib
 import math
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from fingertip.jobs.tasks import TASK_THREADS
+from fem.experiments.scene import load_scene
+from fem.geometry.build import MeshSpec
+from fem.geometry.layered import PRESET_PARAMS
+from fem.geometry.presets import PRESETS_2D
 from fingertip.distribute import TaskFailed, TaskRunner, parse_scheduler, require_dask
 from fingertip.errors import InputError
+from fingertip.jobs.indent import run_indent
+from fingertip.jobs.mesh import check_mesh, mesh_folder
+from fingertip.jobs.reconstruct import run_reconstruct
+from fingertip.jobs.tasks import task_threads
 from fingertip.staging import check_output_dir, staged_output
 from fingertip.tables import write_csv
+from reconstruct.turntable import load_turntable
 
 SUMMARY_COLUMNS = ("subject", "experiment", "step", "depth_mm", "force_N", "max_pressure_MPa", "contact_area_mm2")
 """Leading columns of summary.csv; then peak_<measure> per receptor measure, then error."""
@@ -43,28 +50,28 @@ class Subject:
 
     @property
     def two_d(self) -> bool:
-        from fem.geometry.presets import PRESETS_2D
-
         return self.kind == "preset" and self.source in PRESETS_2D
+
+    def mesh_spec(self, out_dir, mesh: MeshOptions) -> MeshSpec:
+        """The MeshSpec of this subject in cohort folder out_dir with the cohort's mesh options."""
+        source = None if self.kind == "preset" else (str(Path(out_dir) / self.name) if self.kind == "images"
+                                                     else self.source)
+        params = {} if self.two_d else {"tip_mm": mesh.tip_mm}
+        return MeshSpec(source=source, preset=self.source if self.kind == "preset" else None, bone=self.bone,
+                        params=params, sizes=dict(mesh.sizes))
 
 
 @dataclass(frozen=True)
 class MeshOptions:
-    """The mesh options every subject shares (None: each model's default)."""
-    size_mm: float | None = None
-    coarse_mm: float | None = None
-    growth: float | None = None
-    fine_depth_mm: float | None = None
-    tip: str = "flat"
+    """The mesh options every subject shares: sizes (given `fem.geometry.build.SIZE_FIELDS`; the
+    others each model's default) and the 3D distal end tip_mm (`fem.geometry.layered.parse_tip`)."""
+    sizes: dict = field(default_factory=dict)
+    tip_mm: float | None = 0.0
 
 
 def parse_subject(word: str) -> Subject:
     """One SUBJECT word -> Subject; InputError for an unknown preset or a path that is neither a
     turntable folder nor a sections.json folder. Reads image headers only."""
-    from fem.geometry.layered import PRESET_PARAMS
-    from fem.geometry.presets import PRESETS_2D
-    from reconstruct.turntable import load_turntable
-
     if word.startswith("preset:"):
         name, _, suffix = word[len("preset:"):].partition(":")
         known = sorted(PRESET_PARAMS) + list(PRESETS_2D)
@@ -108,9 +115,6 @@ def check_batch(subjects: list[Subject], scene_path, out_dir, mesh: MeshOptions 
     """Every check of `run_batch` before any work: the scene (and its experiments on each
     subject's dimension), the mesh options of each subject, the output folder and the scheduler
     (Dask installed when needed). Returns (Scene, fingertip.distribute.Scheduler)."""
-    from fingertip.jobs.mesh import ModelOptions, check_options
-    from fem.experiments.scene import load_scene
-
     sched = parse_scheduler(scheduler)
     if scene_path is None:
         raise InputError("batch needs --scene S.toml (the experiments every subject runs)")
@@ -119,20 +123,11 @@ def check_batch(subjects: list[Subject], scene_path, out_dir, mesh: MeshOptions 
     for s in subjects:
         try:
             scene.check_dim(2 if s.two_d else 3)
-            check_options(Path(out_dir) / s.name, **_mesh_source(s, out_dir), bone=s.bone,
-                          size_mm=mesh.size_mm, coarse_mm=mesh.coarse_mm, growth=mesh.growth,
-                          fine_depth_mm=mesh.fine_depth_mm, options=ModelOptions(tip=mesh.tip))
+            check_mesh(Path(out_dir) / s.name, s.mesh_spec(out_dir, mesh))
         except InputError as exc:
             raise InputError(f"subject '{s.name}': {exc}") from None
     require_dask(sched)
     return scene, sched
-
-
-def _mesh_source(s: Subject, out_dir) -> dict:
-    """source/preset keywords of fingertip.jobs.mesh for a subject."""
-    if s.kind == "preset":
-        return {"source": None, "preset": s.source}
-    return {"source": str(Path(out_dir) / s.name) if s.kind == "images" else s.source, "preset": None}
 
 
 def run_subject(subject: Subject, out_dir: str, scene_path: str, mesh: MeshOptions, force: bool = False) -> dict:
@@ -141,18 +136,15 @@ def run_subject(subject: Subject, out_dir: str, scene_path: str, mesh: MeshOptio
     a subject's InputError or internal error becomes its error, not an exception. BLAS and
     PARDISO run on TASK_THREADS threads wherever the task runs, so its sums are done in one order
     and a worker writes the bytes this process would."""
-    from fem.core.linalg import blas_threads
-
-    with contextlib.suppress(ImportError):
-        import pypardiso  # noqa: F401  (loads MKL, so that blas_threads finds and limits it)
-
     start = time.perf_counter()
     folder = Path(out_dir) / subject.name
-    run_dir = folder / Path(scene_path).stem
     try:
-        with blas_threads(TASK_THREADS):
-            _run_stages(subject, folder, run_dir, out_dir, scene_path, mesh, force)
-        rows, error = run_rows(subject.name, run_dir), ""
+        with task_threads():
+            if subject.kind == "images":
+                run_reconstruct(subject.source, folder, force=force)
+            mesh_folder(folder, subject.mesh_spec(out_dir, mesh), force=force, progress=False)
+            done = run_indent(folder, folder / Path(scene_path).stem, load_scene(scene_path), progress=False)
+        rows, error = run_rows(subject.name, done.tables), ""
     except InputError as exc:
         rows, error = [], " ".join(str(exc).split())
     except Exception as exc:  # noqa: BLE001 - one subject's bug must not stop the cohort
@@ -160,34 +152,18 @@ def run_subject(subject: Subject, out_dir: str, scene_path: str, mesh: MeshOptio
     return {"subject": subject.name, "rows": rows, "error": error, "seconds": time.perf_counter() - start}
 
 
-def _run_stages(subject: Subject, folder: Path, run_dir: Path, out_dir, scene_path, mesh: MeshOptions, force: bool):
-    from fingertip.jobs.indent import indent_folder
-    from fingertip.jobs.mesh import ModelOptions, run_mesh
-    from fingertip.jobs.reconstruct import run_reconstruct
-    from fem.experiments.scene import load_scene
-
-    if subject.kind == "images":
-        run_reconstruct(subject.source, folder, force=force)
-    run_mesh(str(folder), **_mesh_source(subject, out_dir), bone=subject.bone, size_mm=mesh.size_mm,
-             coarse_mm=mesh.coarse_mm, growth=mesh.growth, fine_depth_mm=mesh.fine_depth_mm,
-             options=ModelOptions(tip=mesh.tip), force=force, progress=False)
-    indent_folder(folder, run_dir, load_scene(scene_path), progress=False)
-
-
-def run_rows(subject: str, run_dir) -> list[dict]:
-    """Summary rows of one run folder, one per experiment and indentation step (in run.json's
-    order): depth, force (N; N/mm in 2D), peak pressure, contact area (2D: width) and per receptor
-    measure its peak, the largest absolute value over the receptor points at that step."""
-    from fem.io.runfolder import IndentRun
-
-    run = IndentRun(run_dir)
+def run_rows(subject: str, tables: dict) -> list[dict]:
+    """Summary rows of one run (`fingertip.jobs.indent.Indented.tables`), one per experiment and
+    indentation step in the scene's order: depth, force (N; N/mm in 2D), peak pressure, contact
+    area (2D: width) and per receptor measure its peak, the largest absolute value over the
+    receptor points at that step."""
     rows = []
-    for name in (e["name"] for e in run.run["experiments"]):
-        steps = run.steps(name)
-        peaks = {m: np.abs(run.values(name, m)).max(axis=1) for m in run.measures(name)}
-        for i, step in enumerate(steps):
+    for name, table in tables.items():
+        steps = table["steps"]
+        peaks = {m: np.abs(v).max(axis=1) for m, v in table["values"].items()}
+        for i in range(len(steps["step"])):
             rows.append({"subject": subject, "experiment": name, "step": i,
-                         **{c: float(step[c]) for c in SUMMARY_COLUMNS[3:]},
+                         **{c: float(steps[c][i]) for c in SUMMARY_COLUMNS[3:]},
                          **{f"peak_{m}": float(v[i]) for m, v in peaks.items()}})
     return rows
 
@@ -227,7 +203,7 @@ def run_batch(subjects: list[Subject], scene_path, out_dir, mesh: MeshOptions = 
               scheduler: str | None = None, force: bool = False, progress: bool = True) -> str:
     """`pipeline.py batch`: every subject through the scene, then out_dir/summary.csv and
     cohort.png; returns the summary text. Checks everything first (`check_batch`)."""
-    from fem import plots
+    from fem import plots    # matplotlib: 0.4 s of import, not needed by the tasks
 
     _, sched = check_batch(subjects, scene_path, out_dir, mesh, scheduler)
     out = Path(out_dir)

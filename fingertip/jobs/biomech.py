@@ -1,18 +1,20 @@
-"""Back ends of `pipeline.py study-layers`, `fit-material`, `contact-series` and `line-load`
-(thesis 4.7, 6.2): parse the option strings, run the fem.biomech.deflection experiments, write the tables,
-JSON and figures into the output folder atomically, and return the summary text.
+"""The jobs of `study-layers`, `fit-material`, `contact-series` and `line-load` (thesis 4.7, 6.2):
+run the fem.biomech experiments, write the tables, JSON and figures into the output folder
+atomically, and return the summary text. Lists of depths, layers and offsets come as lists
+(the command line reads them from words).
 
 CSV tables format floats with `.9g`.
 """
 from __future__ import annotations
 
-import contextlib
 import time
 
 import numpy as np
 
-from fingertip.distribute import TaskRunner, parse_scheduler, require_dask
+from fingertip.distribute import parse_scheduler, require_dask
 from fingertip.errors import InputError
+from fingertip.jobs.tasks import task_map
+from fingertip.progress import as_progress
 from fingertip.staging import check_output_dir, staged_output, write_json
 from fingertip.tables import write_csv
 from fem import plots
@@ -28,59 +30,27 @@ from fem.biomech.fit import fit_force_scale, fit_material, profile_residuals
 from fem.contact.indentors import orientation_deg, shapes_for
 from fem.biomech.measured import read_deflection_csv, read_force_csv
 from fem.io.modelfolder import folder_info
-from fem.experiments.scene import parse_values
+from fem.biomech.line_load import compare_line_load
 
 DPI = 100
 
 
-def _parse_ints(text, what) -> list[int]:
-    try:
-        return [int(t) for t in str(text).replace(" ", "").split(",") if t]
-    except ValueError:
-        raise InputError(f"bad {what} '{text}': give integers separated by commas, e.g. 1,2,3") from None
-
-
-def _parse_floats(text, what) -> list[float]:
-    vals = parse_values(text)
-    if not len(vals) or np.any(vals <= 0):
-        raise InputError(f"bad {what} '{text}': give positive values in mm, e.g. 2.0 or 0.5:2:0.5")
-    return [float(v) for v in vals]
-
-
-def _check_start(out_dir, *indentors, orientation=None) -> None:
-    """The refusals that need no model, before any is read: output folder, indentor codes, orientation."""
+def _check_start(out_dir, *indentors, orientation=None, scheduler=None):
+    """The refusals that need no model, before any is read: output folder, indentor codes,
+    orientation, the scheduler (Dask installed when it needs it); returns the Scheduler."""
     check_output_dir(out_dir)
     for code in indentors:
         shapes_for(code)
     if orientation is not None:
         orientation_deg(orientation)
-
-
-def _experiment(model_dir, indentor, orientation, position_mm, nu, side, progress=False, map=None):
-    return DeflectionExperiment(model_dir, indentor=indentor, orientation=orientation,
-                                position_mm=position_mm, nu=nu, side=side, progress=progress, map=map)
-
-
-def _check_scheduler(scheduler):
-    """The --scheduler value as a fingertip.distribute.Scheduler; InputError for a bad one or when
-    it needs Dask and Dask is missing."""
     sched = parse_scheduler(scheduler)
     require_dask(sched)
     return sched
 
 
-@contextlib.contextmanager
-def _material_tasks(sched):
-    """The map hook of DeflectionExperiment for a scheduler: None for "none" (this process, as
-    ever); else one task per trial material on Dask workers, and this process on
-    fingertip.jobs.tasks.TASK_THREADS threads too, so that its own solves add up as the workers' do."""
-    from fingertip.jobs.tasks import task_map, task_threads
-
-    if sched.kind == "none":
-        yield None
-        return
-    with TaskRunner(sched) as runner, task_threads():
-        yield task_map(runner, "trial material")
+def _experiment(model_dir, indentor, orientation, position_mm, nu, side, progress=False, map=None):
+    return DeflectionExperiment(model_dir, indentor=indentor, orientation=orientation,
+                                position_mm=position_mm, nu=nu, side=side, progress=progress, map=map)
 
 
 def _columns(names, rows) -> dict[str, list]:
@@ -92,7 +62,7 @@ def _force_unit(dim: int) -> str:
     return "N per mm (2D plane strain)" if dim == 2 else "N"
 
 
-def run_study_layers(model_dir, out_dir, base=None, layers="1,2,3,4", offsets="-1,0,1", depths="2.0",
+def run_study_layers(model_dir, out_dir, base=None, layers=(1, 2, 3, 4), offsets=(-1, 0, 1), depths=(2.0,),
                      indentor="wedge", orientation=None, position_mm=None, nu=None, side="mean",
                      data_csv=None, progress=False, scheduler=None) -> str:
     """`pipeline.py study-layers`: layer_study.csv / .json / .png and profile.png in out_dir.
@@ -100,12 +70,10 @@ def run_study_layers(model_dir, out_dir, base=None, layers="1,2,3,4", offsets="-
     scheduler (here and in run_fit_material): none (default), local:N or tcp://HOST:PORT: the
     trial materials as tasks on Dask workers (fingertip.distribute), the same numbers as none."""
     t0 = time.perf_counter()
-    _check_start(out_dir, indentor, orientation=orientation)
-    sched = _check_scheduler(scheduler)
-    depth_list = _parse_floats(depths, "depths")
-    layer_list, offset_list = _parse_ints(layers, "layers"), _parse_ints(offsets, "offsets")
+    sched = _check_start(out_dir, indentor, orientation=orientation, scheduler=scheduler)
+    depth_list, layer_list, offset_list = list(depths), list(layers), list(offsets)
     data = read_deflection_csv(data_csv) if data_csv else []
-    with _material_tasks(sched) as map_:
+    with task_map(sched, "trial material", as_progress(progress)) as map_:
         exp = _experiment(model_dir, indentor, orientation, position_mm, nu, side, progress, map_)
         base = base or exp.info.get("material", "m43338")
         study = layer_study(exp, base, layer_list, offset_list, depth_list)
@@ -142,21 +110,20 @@ def run_study_layers(model_dir, out_dir, base=None, layers="1,2,3,4", offsets="-
 
 
 def run_fit_material(model_dir, out_dir, deflection_csv=None, force_csv=None, keep_ratios=False, base=None,
-                     free_layers="2,3,4", bounds=(1.0, 7.0), indentor="wedge", orientation=None,
+                     free_layers=(2, 3, 4), bounds=(1.0, 7.0), indentor="wedge", orientation=None,
                      position_mm=None, force_indentor="plate", match="least-squares", nu=None,
                      side="mean", noise_mm=None, progress=False, scheduler=None) -> str:
     """`pipeline.py fit-material`: fit.json, fit_profiles.csv, fit_profiles.png, force_fit.png."""
     if deflection_csv is None and force_csv is None:
         raise InputError("fit-material needs --deflection CSV and/or --force CSV")
     t0 = time.perf_counter()
-    _check_start(out_dir, indentor, force_indentor, orientation=orientation)
-    sched = _check_scheduler(scheduler)
-    free = _parse_ints(free_layers, "free layers")
+    sched = _check_start(out_dir, indentor, force_indentor, orientation=orientation, scheduler=scheduler)
+    free = list(free_layers)
     if not bounds[0] < bounds[1]:
         raise InputError(f"--bounds {bounds[0]:g} {bounds[1]:g}: give LO < HI (log10 modulus in Pa), e.g. 1 7")
     data = read_deflection_csv(deflection_csv) if deflection_csv else None
     forces = read_force_csv(force_csv) if force_csv else None
-    with _material_tasks(sched) as map_:
+    with task_map(sched, "trial material", as_progress(progress)) as map_:
         exp = _experiment(model_dir, indentor, orientation, position_mm, nu, side, progress, map_)
         base = base or exp.info.get("material", "m43338")
         base_v = parse_code(base, exp.n_layers)
@@ -205,15 +172,14 @@ def run_fit_material(model_dir, out_dir, deflection_csv=None, force_csv=None, ke
     return "\n".join(lines)
 
 
-def run_contact_series(model_dir, out_dir, material=None, cylinders=None, forces=None, depths=None,
+def run_contact_series(model_dir, out_dir, material=None, codes=None, forces=None, depths=None,
                        orientation=None, position_mm=None, nu=None, progress=False) -> str:
     """`pipeline.py contact-series`: cylinder_series.csv / .json / .png in out_dir."""
     if (forces is None) == (depths is None):
         raise InputError("contact-series needs --force or --depth (one of the two)")
     t0 = time.perf_counter()
     _check_start(out_dir, orientation=orientation)
-    loads = _parse_floats(forces if forces is not None else depths, "forces" if forces is not None else "depths")
-    codes = None if cylinders is None else [c for c in str(cylinders).replace(" ", "").split(",") if c]
+    loads = list(forces if forces is not None else depths)
     exp = _experiment(model_dir, "wedge", orientation, position_mm, nu, "mean", progress)
     material = material or exp.info.get("material", "m43338")
     s = cylinder_series(exp, material, codes, **({"forces_N": loads} if forces is not None else {"depths_mm": loads}))
@@ -240,16 +206,14 @@ def run_contact_series(model_dir, out_dir, material=None, cylinders=None, forces
     return "\n".join(lines)
 
 
-def run_line_load(model_dir, out_dir, depths="0.05,0.5,1,2", material=None, nu=None, large_deformation=False,
+def run_line_load(model_dir, out_dir, depths=(0.05, 0.5, 1.0, 2.0), material=None, nu=None, large_deformation=False,
                   slip=False, half_width_mm=0.25, half_length_mm=1.0, step_mm=0.1, position_mm=None,
                   progress=False) -> str:
     """`pipeline.py line-load`: line_load.csv / .json / .png in out_dir (linear; with
     large_deformation also the neo-Hookean solve and where the two part)."""
-    from fem.biomech.line_load import compare_line_load
-
     t0 = time.perf_counter()
     _check_start(out_dir)
-    depth_list = _parse_floats(depths, "depths")
+    depth_list = list(depths)
     info = folder_info(model_dir)
     material = material or info.get("material", "m43338")
     parse_code(material)

@@ -1,6 +1,16 @@
-"""`reconstruct`: turntable images -> sections.json, surface.stl, report.png; and the `run` chain."""
+"""The `reconstruct` job (turntable images -> sections.json, surface.stl, report.png) and the
+`run` chain (reconstruct -> mesh [-> indent a scene] in one folder), each returning the summary
+text the command line prints."""
 from __future__ import annotations
 
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from fem.experiments.scene import load_scene
+from fem.geometry.build import MeshSpec
+from fingertip.jobs.indent import indent_folder
+from fingertip.jobs.mesh import check_mesh, mesh_folder
 from fingertip.staging import check_output_dir
 from reconstruct.pipeline import reconstruct_folder
 
@@ -17,16 +27,28 @@ def run_reconstruct(images, out_dir, spacing_mm=(0.5, 2.0), tol_mm: float = 0.02
     return result.summary() + f"\nwritten to      {out_dir}/ (sections.json, surface.stl, report.png)"
 
 
-def chain_steps(images, out_dir, size_mm: float, scene: str | None = None, force: bool = False,
-                quiet: bool = False) -> list[list[str]]:
-    """The command lines of `run`, in order: reconstruct -> mesh [-> indent the scene], all in out_dir.
+@dataclass
+class Stage:
+    """One stage of a chain: its command name and the call that runs it (-> summary text)."""
+    name: str
+    run: Callable[[], str]
 
-    Each stage runs as its own subcommand would (its defaults, its check for current outputs);
-    --force and --quiet go to reconstruct and mesh, --quiet also to indent.
-    """
-    flags = [f for f, on in (("--force", force), ("--quiet", quiet)) if on]
-    steps = [["reconstruct", str(images), "--out", str(out_dir), *flags],
-             ["mesh", str(out_dir), "--out", str(out_dir), "--size", str(size_mm), *flags]]
-    if scene:
-        steps.append(["indent", str(out_dir), "--scene", str(scene), *(["--quiet"] if quiet else [])])
-    return steps
+
+def chain_stages(images, out_dir, size_mm: float, scene_path=None, force: bool = False,
+                 progress: bool = True) -> list[Stage]:
+    """The stages of `run` in order, every one checked before any runs: reconstruct `images`
+    into out_dir, mesh its sections there with volar edge length size_mm, and run the scene file
+    (if any) into <out_dir>/indent_<scene stem>. Each stage runs as its own command would (its
+    defaults, its check for current outputs); force redoes reconstruct and mesh."""
+    out = Path(out_dir)
+    check_output_dir(out)
+    spec = MeshSpec(source=str(out), sizes={"size_mm": size_mm})
+    check_mesh(out, spec)
+    stages = [Stage("reconstruct", lambda: run_reconstruct(images, out, force=force, progress=progress)),
+              Stage("mesh", lambda: mesh_folder(out, spec, force=force, progress=progress))]
+    if scene_path:
+        scene = load_scene(scene_path)
+        run_dir = out / f"indent_{Path(scene_path).stem}"
+        check_output_dir(run_dir)
+        stages.append(Stage("indent", lambda: indent_folder(out, run_dir, scene, progress=progress)))
+    return stages

@@ -1,0 +1,128 @@
+"""The command line: one subcommand per job (`fingertip.jobs`), its flags derived from the
+declared parameters (`fingertip.cli.options`). It parses words into objects, runs the job and
+prints the summary; nothing else.
+
+    fingertip <command> ...        python pipeline.py <command> ...        main(["mesh", "--help"])
+
+Bad input ends with one line `error: ...` on stderr and exit code 2, and writes nothing.
+
+Only the module of the command given is imported (`COMMANDS`): all of them with the science
+behind them take 1.3 s to import, one 0.1-0.7 s, and `--help` alone 0.1 s.
+"""
+from __future__ import annotations
+
+import logging
+import os
+import signal
+import sys
+import traceback
+from pathlib import Path
+
+import importlib
+
+from fingertip.cli.options import Parser
+from fingertip.errors import InputError
+
+COMMANDS = {
+    "reconstruct": ("reconstruct", "add_reconstruct", "turntable images -> sections.json, surface.stl, report.png"),
+    "render": ("reconstruct", "add_render", "render a synthetic turntable set of a known shape (+ ground truth)"),
+    "mesh": ("mesh", "add_mesh", "layered model + tetrahedral mesh (or a 2D plane-strain mesh) -> mesh.vtu, "
+             "model.json"),
+    "prepare": ("indent", "add_prepare", "store a model's response model (compliance of the pad and receptor "
+                "response) so later indent commands answer without factorising"),
+    "indent": ("indent", "add_indent", "rigid indentors on a meshed model: depth or force control, sweeps -> CSV, "
+               "PNG, PVD"),
+    "study-layers": ("biomech", "add_study_layers", "layer-stiffness study (thesis fig. 6-10): deflection profiles "
+                     "under a line load with each layer's modulus varied by powers of ten"),
+    "fit-material": ("biomech", "add_fit_material", "fit layer moduli to measured deflection profiles (ratios) and "
+                     "force-depth data (absolute scale)"),
+    "line-load": ("biomech", "add_line_load", "surface deflection and force under a prescribed line load (thesis "
+                  "6.2.1); --large-deformation adds the neo-Hookean solve and compares"),
+    "contact-series": ("biomech", "add_contact_series", "cylinders C1-C8 at constant force or depth: contact area "
+                       "(2D: width) and max pressure vs diameter (thesis figs. 4-25, 5-14)"),
+    "analyze": ("analyze", "add_analyze", "fit the linear receptor model d = a S + b to recorded rates: ranked "
+                "candidate table, profile and scatter plots"),
+    "run": ("reconstruct", "add_run", "the chain: reconstruct -> mesh [-> indent a scene]; current stages are "
+            "skipped"),
+    "batch": ("batch", "add_batch", "a cohort: each subject reconstruct -> mesh -> scene, then summary.csv and "
+              "cohort.png comparing them; in this process or on Dask"),
+    "reproduce": ("reproduce", "add_reproduce", "run the thesis's experiments (chapters 4-7) and write a report: "
+                  "what the thesis states, the project's number, a verdict"),
+}
+"""Every subcommand: (module of fingertip.cli, the function adding its arguments, help), in the
+order `--help` lists them."""
+DESCRIPTION = "Command line for the fingertip toolkit: turntable photographs -> layered finite-element model -> " \
+              "tactile indentation experiments."
+DEBUG_ENV = "FINGERTIP_DEBUG"
+"""Environment variable: when set (non-empty), an internal error also prints its traceback."""
+LOGGERS = ("fem", "fingertip", "reconstruct")
+"""The packages whose log warnings the command line prints as `warning: ...` lines on stderr."""
+
+
+def build_parser(prog: str = "pipeline.py", command: str | None = None) -> Parser:
+    """The command line's parser with the arguments of `command` (each subcommand sets `run` and,
+    where it checks its options before any work, `check`); the other subcommands are listed with
+    their help only (None: all of them; every one with "all")."""
+    parser = Parser(prog=prog, description=DESCRIPTION)
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
+    for name, (module, add, help_text) in COMMANDS.items():
+        p = sub.add_parser(name, help=help_text)
+        if command in (name, "all"):
+            getattr(importlib.import_module(f"fingertip.cli.{module}"), add)(p)
+    return parser
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised in the main thread like Ctrl-C, so the same cleanups run."""
+
+
+def _terminate(signum, frame):
+    raise Terminated()
+
+
+def _one_line(text) -> str:
+    return " ".join(str(text).split())
+
+
+class _WarningLines(logging.Handler):
+    """Log records of WARNING and above as one `warning: ...` line each on stderr."""
+
+    def emit(self, record):
+        print(f"warning: {_one_line(record.getMessage())}", file=sys.stderr, flush=True)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run one command (argv: its words, default sys.argv[1:]); returns the exit code: 0 done,
+    2 bad input (one `error:` line), 130 Ctrl-C, 143 SIGTERM, 1 an internal error (a bug)."""
+    installed = argv is None and Path(sys.argv[0]).stem == "fingertip"      # the console script
+    try:
+        previous = signal.signal(signal.SIGTERM, _terminate)
+    except ValueError:                                    # not the main thread: leave signals alone
+        previous = None
+    handler = _WarningLines(logging.WARNING)
+    loggers = [logging.getLogger(name) for name in LOGGERS]
+    for logger in loggers:
+        logger.addHandler(handler)
+    try:
+        words = sys.argv[1:] if argv is None else [str(w) for w in argv]
+        command = words[0] if words and words[0] in COMMANDS else None
+        args = build_parser("fingertip" if installed else "pipeline.py", command).parse_args(words)
+        args.run(args)
+    except InputError as exc:
+        print(f"error: {_one_line(exc)}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt as exc:
+        print("error: interrupted; nothing was written", file=sys.stderr)
+        return 143 if isinstance(exc, Terminated) else 130
+    except Exception as exc:  # noqa: BLE001 - the last resort: one line, not a traceback
+        if os.environ.get(DEBUG_ENV):
+            traceback.print_exc()
+        print(f"error: internal error {type(exc).__name__}: {_one_line(exc)} (a bug; set {DEBUG_ENV}=1 "
+              "for the traceback and report it)", file=sys.stderr)
+        return 1
+    finally:
+        for logger in loggers:
+            logger.removeHandler(handler)
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+    return 0
