@@ -25,11 +25,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from fem.receptors.afferents import respond, sampler_of, scene_responses
 from fem.experiments.runner import run_experiments
-from fem.thesis.findings import Workshop
-from fem.io.modelfolder import read_model
 from fem.experiments.scene import load_scene
+from fem.io.modelfolder import read_model
+from fem.receptors.afferents import respond, sampler_of, scene_responses
+from fem.thesis.findings import Workshop
 
 SCENE = Path(__file__).resolve().parents[1] / "scenes" / "ramp_hold.toml"
 

@@ -29,12 +29,12 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from fem.receptors.afferents import Population, experiment_inputs, respond, sampler_of
 from fem.experiments.runner import run_experiments
-from fem.thesis.findings import Workshop
-from fem.io.modelfolder import read_model
-from fem.verify.closed_forms import sneddon_punch_force_N, sneddon_punch_stress_zz_MPa
 from fem.experiments.scene import load_scene
+from fem.io.modelfolder import read_model
+from fem.receptors.afferents import Population, experiment_inputs, respond, sampler_of
+from fem.thesis.findings import Workshop
+from fem.verify.closed_forms import sneddon_punch_force_N, sneddon_punch_stress_zz_MPa
 
 ROOT = Path(__file__).resolve().parents[1]
 E_MPA, NU, RADIUS_MM, DEPTHS = 0.05, 0.4, 1.0, {"SA1": 0.3, "RA": 1.6}

@@ -29,12 +29,18 @@ sys.path.insert(0, str(HERE.parent))
 from matplotlib.figure import Figure  # noqa: E402
 
 import pipeline  # noqa: E402
-from fem.plots import save  # noqa: E402
-from fem.receptors.probes import (Probe2D, gap_analysis, point_load_field, receptive_field, settling_separation,  # noqa: E402
-                        two_point_curves)
-from fem.io.runfolder import IndentRun  # noqa: E402
-from fem.receptors.dynamics import LumpedReceptor, measure_time_course, ramp_and_hold  # noqa: E402
 from fem.contact.indentors import make_indentor  # noqa: E402
+from fem.io.runfolder import IndentRun  # noqa: E402
+from fem.plots import save  # noqa: E402
+from fem.receptors.dynamics import LumpedReceptor, measure_time_course, ramp_and_hold  # noqa: E402
+from fem.receptors.probes import (  # noqa: E402
+    Probe2D,
+    gap_analysis,
+    point_load_field,
+    receptive_field,
+    settling_separation,
+    two_point_curves,
+)
 
 RESULTS = HERE / "results"
 

@@ -25,8 +25,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from fingertip.jobs.batch import MeshOptions, parse_subjects, run_subject, summary_table
 from fingertip.distribute import Scheduler, TaskRunner
+from fingertip.jobs.batch import MeshOptions, parse_subjects, run_subject, summary_table
 from fingertip.tables import csv_text
 
 SCENE = """\

@@ -37,7 +37,12 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 import pipeline  # noqa: E402
-from fem.biomech.deflection import DeflectionExperiment, Profile, cylinder_series, layer_study  # noqa: E402
+from fem.biomech.deflection import (  # noqa: E402
+    DeflectionExperiment,
+    Profile,
+    cylinder_series,
+    layer_study,
+)
 from fem.biomech.fit import fit_material  # noqa: E402
 from fem.biomech.line_load import compare_line_load  # noqa: E402
 from fem.core.model import Model  # noqa: E402

@@ -29,9 +29,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from fem.contact.indentors import make_indentor  # noqa: E402
 from fem.contact.linear import MAX_DEPTH_MM, ContactModel, reach  # noqa: E402
 from fem.io.modelfolder import CONTACT_REGION, factorise, read_model, receptor_surface  # noqa: E402
-from fem.contact.indentors import make_indentor  # noqa: E402
 from fem.receptors.grid import ReceptorSampler, receptor_grid  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results" / "contact_bench.md"
@@ -166,8 +166,8 @@ def case_dorsal(args):
 
 def case_hertz(args):
     """Rigid sphere R = 5 mm on a quarter block 40 x 40 x 40 mm (graded P2 tets), E = 1 MPa."""
-    from fem.verify.closed_forms import box, fine_then_growing, hertz_sphere
     from fem.core.model import Model
+    from fem.verify.closed_forms import box, fine_then_growing, hertz_sphere
 
     rows = []
     for nu in (0.3, 0.49):

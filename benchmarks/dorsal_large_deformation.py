@@ -22,9 +22,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from fem.io.modelfolder import held_regions  # noqa: E402
 from fem.biomech.line_load import line_load_model  # noqa: E402
 from fem.core.neohookean import NeoHookean  # noqa: E402
+from fem.io.modelfolder import held_regions  # noqa: E402
 
 
 def main():

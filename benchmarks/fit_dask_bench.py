@@ -25,8 +25,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 import pipeline
-from fingertip.jobs.biomech import run_fit_material
 from fem.biomech.deflection import DeflectionExperiment
+from fingertip.jobs.biomech import run_fit_material
 
 
 def main() -> None:

@@ -20,8 +20,15 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 
-from fem.geometry.mesh3d import Sizing, TetMesh, label_tets, region_tags, report, tetrahedralize  # noqa: E402
 from fem.geometry.layered import model_from_args, params_for  # noqa: E402
+from fem.geometry.mesh3d import (  # noqa: E402
+    Sizing,
+    TetMesh,
+    label_tets,
+    region_tags,
+    report,
+    tetrahedralize,
+)
 
 COLUMNS = ("size mm", "wall s", "cpu s", "tets", "points", "fine-zone median edge mm", "max volume error %",
            "bone volume error %", "min dihedral deg", "1st pct dihedral deg", "min scaled Jacobian",

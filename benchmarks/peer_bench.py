@@ -48,11 +48,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 import pipeline  # noqa: E402
+from fem.contact.indentors import make_indentor  # noqa: E402
+from fem.experiments.runner import placement  # noqa: E402
+from fem.io.modelfolder import CONTACT_REGION, held_regions, read_model  # noqa: E402
 from fingertip.jobs.indent import indent_folder, scene_of_flags  # noqa: E402
 from fingertip.jobs.prepare import prepare_folder  # noqa: E402
-from fem.experiments.runner import placement  # noqa: E402
-from fem.contact.indentors import make_indentor  # noqa: E402
-from fem.io.modelfolder import CONTACT_REGION, held_regions, read_model  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results" / "peer_bench.md"
 CLI_RUNS = 3

@@ -36,8 +36,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from fem.verify.halfspace import flat_block_model  # noqa: E402
 from fem.verify.closed_forms import sneddon_punch_force_N, sneddon_punch_stress_zz_MPa  # noqa: E402
+from fem.verify.halfspace import flat_block_model  # noqa: E402
 
 RADIUS_MM, DEPTH_MM, E_MPA, NU = 1.0, 0.5, 0.05, 0.4
 AFFERENTS = (("SA1", 0.3), ("RA", 1.6), ("PC", 2.0))

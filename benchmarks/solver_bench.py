@@ -24,7 +24,6 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from fem import Model
-
 from fem.verify import closed_forms as ref  # noqa: E402
 
 A, B, C, P, E = 1.0, 2.0, 1.5, 0.01, 0.01

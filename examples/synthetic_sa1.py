@@ -25,10 +25,12 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 
 import pipeline  # noqa: E402
-from fem.receptors.analysis import model_values  # noqa: E402
-from fem.receptors.neural import write_neural_csv  # noqa: E402
-from fem.receptors.neural import make_neural  # noqa: E402
 from fem.io.runfolder import IndentRun  # noqa: E402
+from fem.receptors.analysis import model_values  # noqa: E402
+from fem.receptors.neural import (
+    make_neural,  # noqa: E402
+    write_neural_csv,  # noqa: E402
+)
 
 TRUTH = {"measure": "sed_MPa", "depth_mm": 0.75, "diameter_mm": 12.0, "a": 8e5, "b": 10.0, "noise_ips": 3.0,
          "seed": 1}

@@ -7,9 +7,10 @@ from __future__ import annotations
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator, ScalarFormatter
 
-from fem.receptors.analysis import model_values
 from fem.io.runfolder import pad3
+from fem.receptors.analysis import model_values
 
 
 def save(fig: Figure, path, dpi: int = 110) -> None:
@@ -358,7 +359,6 @@ def line_load_figure(c, large_deformation: bool) -> Figure:
 COHORT_PANELS = 6
 """Experiments drawn by cohort_figure (the first ones; summary.csv has them all)."""
 
-
 def cohort_figure(curves: dict, title: str = "") -> Figure:
     """Subjects compared per experiment: force and peak pressure against depth, one column per
     experiment (at most COHORT_PANELS), one line per subject. curves: {experiment: {subject:
@@ -436,8 +436,6 @@ def response_scatter_figure(runs, data, fits) -> Figure:
 
 def _readable_ticks(axis, nbins: int = 5) -> None:
     """At most nbins tick labels, very small or large values with a shared power of ten."""
-    from matplotlib.ticker import MaxNLocator, ScalarFormatter
-
     axis.set_major_locator(MaxNLocator(nbins=nbins))
     fmt = ScalarFormatter(useMathText=True)
     fmt.set_powerlimits((-2, 3))

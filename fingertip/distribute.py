@@ -5,7 +5,8 @@
         results = runner.map(run_subject, [(a,), (b,), (c,)])   # [f(a), f(b), f(c)]
 
 Dask (`dask[distributed]`, the optional extra `pip install -e ".[dask]"`) is imported only when a
-scheduler other than "none" is used. A task is a module-level function and small arguments (paths,
+scheduler other than "none" is used (inside the functions: it is an optional extra most installs
+do not have). A task is a module-level function and small arguments (paths,
 option values): workers read large inputs from a folder they share with the caller, so what goes
 over the network per task is a few hundred bytes. Results come back in the order of the tasks,
 not of completion, so a run gives the same output whatever the scheduler. A task whose worker dies

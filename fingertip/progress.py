@@ -29,11 +29,12 @@ import threading
 import time
 from pathlib import Path
 
+from tqdm import tqdm
+
 HISTORY_KEEP = 30
 """Timings kept per kind and host (the most recent)."""
 REFRESH_S = 1.0
 """Seconds between refreshes of a task line."""
-
 
 def cache_root() -> Path:
     """The toolkit's cache folder: $FINGERTIP_CACHE_DIR, else ~/.cache/fingertip-fem."""
@@ -42,7 +43,6 @@ def cache_root() -> Path:
 
 class Silent:
     """Progress that reports nothing (the default of every science function)."""
-
     def bar(self, iterable, total=None, desc="", unit="it"):
         return iterable
 
@@ -69,7 +69,6 @@ def as_progress(progress):
 class TimingHistory:
     """(size, seconds) of earlier long calls per kind on this host, in a JSON file; `estimate`
     extrapolates them with a power law. A missing or unreadable file is an empty history."""
-
     def __init__(self, path=None):
         self.path = Path(path) if path is not None else cache_root() / "timings.json"
         self.host = platform.node() or "host"
@@ -132,14 +131,12 @@ class Progress:
     """Progress on a stream (stderr): tqdm bars, task lines with elapsed time and estimate, notes.
 
     history: a TimingHistory (default: the cache folder's), or None to neither read nor record."""
-
     def __init__(self, stream=None, history="default"):
         self.stream = stream if stream is not None else sys.stderr
         self.history = TimingHistory() if history == "default" else history
         self._bars = []                              # open bars, innermost last
 
     def bar(self, iterable, total=None, desc="", unit="it"):
-        from tqdm import tqdm
 
         if total is None and hasattr(iterable, "__len__"):
             total = len(iterable)
@@ -158,8 +155,6 @@ class Progress:
         its own ("desc: elapsed (about N s expected)", then "desc: done in N s"), shown from the
         first refresh on (calls shorter than REFRESH_S print nothing). The call must release
         Python's lock for the refreshes to run (PARDISO, numpy, a worker process do)."""
-        from tqdm import tqdm
-
         guess = self.history.estimate(kind, size) if self.history is not None and kind else None
         start = time.perf_counter()
         outer = self._bars[-1] if self._bars else None
@@ -207,6 +202,4 @@ class Progress:
 
     def note(self, text):
         """One line of text (printed above any open bar)."""
-        from tqdm import tqdm
-
         tqdm.write(str(text), file=self.stream)

@@ -13,7 +13,12 @@ from scipy.spatial import ConvexHull
 from fingertip.errors import InputError
 from reconstruct.calibrate import sample_borders
 from reconstruct.camera import Camera, border_tables, perspective_fit, proximal_cut
-from reconstruct.sections import fit_support, support_curve, support_samples, support_values
+from reconstruct.sections import (
+    fit_support,
+    support_curve,
+    support_samples,
+    support_values,
+)
 
 TANGENT_TOL_PX = 0.3        # rms disagreement of a section's tangents above which it is refused
 FOLD_TOL_PX = 1.0           # depth of a fold of the outline (inside its own hull) that is refused

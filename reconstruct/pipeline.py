@@ -17,12 +17,27 @@ from fingertip.errors import InputError
 from fingertip.staging import staged_output, write_json
 from reconstruct.calibrate import Frame, estimate_axis, sample_borders, template_scale
 from reconstruct.camera import Camera, border_tables, perspective_fit, proximal_cut
-from reconstruct.checks import (CUT_SEARCH_PX, CUT_TOL_PX, ROD_MARGIN_PX, TANGENT_TOL_PX, check_parallel,
-                                consistent_sections)
+from reconstruct.checks import (
+    CUT_SEARCH_PX,
+    CUT_TOL_PX,
+    ROD_MARGIN_PX,
+    TANGENT_TOL_PX,
+    check_parallel,
+    consistent_sections,
+)
 from reconstruct.lens import Lens, calibrate_lens, undistort_borders
 from reconstruct.report import write_report
-from reconstruct.sections import (N_POINTS, choose_levels, convex_section, fit_support, harmonics_for,
-                                  support_curve, support_samples, support_values, tangent_polygon)
+from reconstruct.sections import (
+    N_POINTS,
+    choose_levels,
+    convex_section,
+    fit_support,
+    harmonics_for,
+    support_curve,
+    support_samples,
+    support_values,
+    tangent_polygon,
+)
 from reconstruct.silhouette import Borders, extract_borders
 from reconstruct.surface import loft
 from reconstruct.turntable import Turntable, load_turntable

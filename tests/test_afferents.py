@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 import pipeline
-from fingertip.errors import InputError
-from fem.receptors.afferents import Population, experiment_inputs, respond, sampler_of
 from fem.experiments.runner import run_experiments
-from fem.io.modelfolder import read_model
 from fem.experiments.scene import Scene, load_scene
 from fem.experiments.traces import fractions
+from fem.io.modelfolder import read_model
+from fem.receptors.afferents import Population, experiment_inputs, respond, sampler_of
+from fingertip.errors import InputError
 
 SCENE = Path(__file__).resolve().parents[1] / "scenes" / "ramp_hold.toml"
 

@@ -9,12 +9,25 @@ import numpy as np
 import pytest
 
 import pipeline
-from fem.receptors.analysis import as_runs, fit_measure, goodness, linear_fit, model_values, rank_candidates, rank_per_stimulus
-from fem.receptors.neural import read_neural_csv, write_neural_csv
-from fem.receptors.neural import make_neural
-from fem.receptors.probes import (Probe2D, gap_analysis, point_load_field, receptive_field, settling_separation,
-                        two_point_curves)
 from fem.io.runfolder import IndentRun
+from fem.receptors.analysis import (
+    as_runs,
+    fit_measure,
+    goodness,
+    linear_fit,
+    model_values,
+    rank_candidates,
+    rank_per_stimulus,
+)
+from fem.receptors.neural import make_neural, read_neural_csv, write_neural_csv
+from fem.receptors.probes import (
+    Probe2D,
+    gap_analysis,
+    point_load_field,
+    receptive_field,
+    settling_separation,
+    two_point_curves,
+)
 from fingertip.errors import InputError
 
 SCENE = """[receptors]

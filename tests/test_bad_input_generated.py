@@ -75,9 +75,9 @@ def work(tmp_path_factory):
         shutil.copy(p, tt / p.name)
     (base / "a_file").write_text("x\n")
     patches = pytest.MonkeyPatch()
-    import fem.geometry.mesh3d
-    import fem.geometry.mesh2d
     import fem.core.model
+    import fem.geometry.mesh2d
+    import fem.geometry.mesh3d
     import reconstruct.pipeline
 
     patches.setattr(fem.core.model.Model, "system", _started)

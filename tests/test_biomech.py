@@ -4,11 +4,23 @@ import numpy as np
 import pytest
 
 import pipeline
-from fem.biomech.deflection import (DeflectionExperiment, Profile, code_of, cylinder_series, fit_free_length, layer_study,
-                         parse_code, side_profile)
+from fem.biomech.deflection import (
+    DeflectionExperiment,
+    Profile,
+    code_of,
+    cylinder_series,
+    fit_free_length,
+    layer_study,
+    parse_code,
+    side_profile,
+)
 from fem.biomech.fit import fit_force_scale, fit_material
 from fem.biomech.measured import read_deflection_csv, read_force_csv
-from fem.verify.closed_forms import WATERBED_PER_BEAM, beam_deflection, waterbed_deflection
+from fem.verify.closed_forms import (
+    WATERBED_PER_BEAM,
+    beam_deflection,
+    waterbed_deflection,
+)
 from fingertip.errors import InputError
 
 

@@ -7,7 +7,6 @@ import pytest
 import scipy.optimize as so
 
 from fem.contact import compliance
-
 from fem.contact import linear as contact
 from fem.contact.indentors import make_indentor
 from fem.verify.closed_forms import hertz_sphere

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 import pipeline
+from fem.contact.indentors import make_indentor
 from fem.contact.linear import ContactModel
 from fem.io.modelfolder import open_model
-from fem.contact.indentors import make_indentor
 
 
 @pytest.fixture(scope="module")

@@ -5,10 +5,10 @@ import math
 import numpy as np
 import pytest
 
-from fem.contact.linear import ContactModel
 from fem.contact.indentors import make_indentor
-from fem.verify.closed_forms import box, fine_then_growing, hertz_cylinder, hertz_sphere
+from fem.contact.linear import ContactModel
 from fem.core.model import Model
+from fem.verify.closed_forms import box, fine_then_growing, hertz_cylinder, hertz_sphere
 
 
 def half_plane(nu, fine_mm=0.02, size_mm=40.0):

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 import pipeline
-from fingertip.jobs.tasks import task_threads
 from fem.biomech.deflection import DeflectionExperiment
+from fingertip.jobs.tasks import task_threads
 
 
 @pytest.fixture(scope="module")

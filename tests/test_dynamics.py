@@ -5,7 +5,13 @@ import math
 import numpy as np
 import pytest
 
-from fem.receptors.dynamics import LumpedReceptor, measure_time_course, phases, ramp_and_hold, silence_delay
+from fem.receptors.dynamics import (
+    LumpedReceptor,
+    measure_time_course,
+    phases,
+    ramp_and_hold,
+    silence_delay,
+)
 from fingertip.errors import InputError
 
 RAMP, HOLD, RELEASE = 0.1, 1.0, 0.1

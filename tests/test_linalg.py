@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from fem.verify import closed_forms as ref
 from fem.core.linalg import Pardiso, SaddleFactor, blas_threads, solve_refined
 from fem.core.model import Model
+from fem.verify import closed_forms as ref
 
 
 def _saddle(n=40, m=12, seed=0):

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from fem import InputError, Model
-from fem.verify import closed_forms as ref
 from fem.core.measures import MEASURES, State, check_names, describe, evaluate
+from fem.verify import closed_forms as ref
 
 
 def test_registry_names_carry_units():

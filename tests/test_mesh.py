@@ -8,8 +8,14 @@ import numpy as np
 import pytest
 
 import pipeline
-from fem.geometry.mesh3d import boundary_faces, label_tets, quality, straddle_check, tet_volumes
 from fem.geometry.layered import model_from_args, params_for
+from fem.geometry.mesh3d import (
+    boundary_faces,
+    label_tets,
+    quality,
+    straddle_check,
+    tet_volumes,
+)
 from fingertip.errors import InputError
 
 ARGS = ["mesh", "--preset", "monkey", "--size", "0.8", "--quiet"]
@@ -242,12 +248,11 @@ def test_bar_along_the_axis_presses_the_skin_of_the_proximal_cut(built, tmp_path
 def test_3d_scenes_run_on_the_preset(built, tmp_path, scene):
     """Every shipped 3D scene runs on the monkey preset (until the proximal cut's skin was freed,
     bars, cylinders, line_load and steps stopped at its held rim); all KKT checks pass."""
+    from dataclasses import replace
     from pathlib import Path
 
-    from dataclasses import replace
-
-    from fingertip.jobs.indent import indent_folder
     from fem.experiments.scene import Output, load_scene
+    from fingertip.jobs.indent import indent_folder
 
     spec = replace(load_scene(Path(pipeline.__file__).parent / "scenes" / f"{scene}.toml"),
                    output=Output(plots=False, pvd=False))

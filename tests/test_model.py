@@ -145,8 +145,8 @@ def test_tilted_distal_end_up_the_top_is_the_flat_cut_rim_or_the_rounded_pad():
     rim of a flat distal cut, but on the pad of a rounded tip, where the tip has turned 30 deg."""
     from dataclasses import replace
 
-    from fem.experiments.runner import scene_position
     from fem.contact.indentors import approach_direction
+    from fem.experiments.runner import scene_position
 
     place = {"approach": approach_direction(-30.0)}
     for tip in (0.0, 3.5):
@@ -266,7 +266,12 @@ def preset_replica(tmp_path, preset, scale=1.0):
 
 
 def test_preset_middle_widths_and_size_rule_reproduce_the_presets():
-    from fem.geometry.layered import PRESET_MIDDLE_WIDTH_MM, PRESET_PARAMS, preset_sections, size_defaults
+    from fem.geometry.layered import (
+        PRESET_MIDDLE_WIDTH_MM,
+        PRESET_PARAMS,
+        preset_sections,
+        size_defaults,
+    )
 
     for preset, width in PRESET_MIDDLE_WIDTH_MM.items():
         z, polys, _ = preset_sections(preset)

@@ -5,12 +5,12 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 from scipy.optimize import brentq
+from test_biomech import section  # noqa: F401  (the coarse monkey section fixture)
 
 from fem.biomech.line_load import compare_line_load, line_load_model
+from fem.core.model import Model
 from fem.core.neohookean import NeoHookean
 from fem.verify.closed_forms import box
-from fem.core.model import Model
-from test_biomech import section  # noqa: F401  (the coarse monkey section fixture)
 
 
 def _block(dim, n=2, layered=False, nu=0.45):

@@ -9,8 +9,8 @@ import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 
 import pipeline
-from fingertip.progress import SILENT, Progress, TimingHistory, as_progress
 from fem import plots
+from fingertip.progress import SILENT, Progress, TimingHistory, as_progress
 
 
 @pytest.fixture(autouse=True)

@@ -6,9 +6,9 @@ and their strains would jump by the layers' modulus ratio.
 """
 import numpy as np
 
+from fem.core.model import Model
 from fem.receptors.grid import INTERFACE_SNAP_MM, ReceptorSampler, receptor_grid
 from fem.verify.closed_forms import box
-from fem.core.model import Model
 
 
 def _two_layer_block(wiggle_mm):

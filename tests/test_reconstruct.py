@@ -13,8 +13,8 @@ import pytest
 import trimesh
 
 import pipeline
-from reconstruct.pipeline import reconstruct, sections_document
 from fem.geometry.presets import make_shape, shape_from_truth
+from reconstruct.pipeline import reconstruct, sections_document
 from reconstruct.synthetic import compare_to_truth, load_truth, render_turntable
 from reconstruct.turntable import load_turntable
 

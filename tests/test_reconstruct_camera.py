@@ -6,15 +6,14 @@ true convex sections, volume within 1 %, z = 0 at the proximal cut within 1 px. 
 warning with the estimated error and no inconsistent section. 48 views of 360 x 460 px at
 0.08 mm/px keep the render to a few seconds; errors are in px, so they carry over to larger images.
 """
-import json
 import shutil
 
 import numpy as np
 import pytest
 
 import pipeline
-from fingertip.errors import InputError
 from fem.geometry.presets import make_shape, shape_from_truth
+from fingertip.errors import InputError
 from reconstruct.checks import consistent_sections, fold_depth
 from reconstruct.pipeline import reconstruct, sections_document
 from reconstruct.sections import support_curve

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import pipeline
-from fem.thesis import claims as thesis
 from fem.thesis import chapter4_mechanics
+from fem.thesis import claims as thesis
 from fem.thesis.findings import DIFFERS, REPRODUCED
 
 

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 import pipeline
-from fem.experiments.scene import Scene
-from fem.experiments.runner import run_experiments
-from fem.io.modelfolder import read_model
 from fem.experiments.response import ResponseStore, response_key
+from fem.experiments.runner import run_experiments
+from fem.experiments.scene import Scene
+from fem.io.modelfolder import read_model
 
 RTOL = 1e-9
 """Stored against factorised: both solve the same linear system, once by a Schur complement of a

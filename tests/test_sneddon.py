@@ -31,8 +31,12 @@ Measured (this mesh; benchmarks/sneddon_check.py for a finer one):
 import numpy as np
 import pytest
 
+from fem.verify.closed_forms import (
+    boussinesq,
+    sneddon_punch_force_N,
+    sneddon_punch_stress_zz_MPa,
+)
 from fem.verify.halfspace import flat_block_model
-from fem.verify.closed_forms import boussinesq, sneddon_punch_force_N, sneddon_punch_stress_zz_MPa
 
 RADIUS_MM, DEPTH_MM, E_MPA, NU = 1.0, 0.5, 0.05, 0.4
 AFFERENT_DEPTHS_MM = {"SA1": 0.3, "RA": 1.6, "PC": 2.0}
@@ -161,7 +165,12 @@ def test_afferents_on_the_block_spike_as_on_the_published_half_space(punched):
     1.6 mm: spike counts within 5 % (at least 1 spike), first spikes within 1 ms. Measured: equal
     counts for all 17 afferents (SA1 9-25, RA 3-8 spikes) and identical first spikes (inputs
     within 2.8 %, sampled every 5 ms)."""
-    from fem.receptors.transduction import class_data, dynamic_input, resample, spike_trains
+    from fem.receptors.transduction import (
+        class_data,
+        dynamic_input,
+        resample,
+        spike_trains,
+    )
 
     _, syy, _, _ = punched
     pts = _points()

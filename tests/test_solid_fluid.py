@@ -13,13 +13,13 @@ import numpy as np
 import pytest
 
 import pipeline
-from fingertip.errors import InputError
 from fem import Model
-from fem.geometry import mesh2d
-from fem.contact.linear import ContactModel
 from fem.contact.indentors import make_indentor
+from fem.contact.linear import ContactModel
 from fem.core.materials import FLUID_LAYER
+from fem.geometry import mesh2d
 from fem.io.modelfolder import factorise, open_model, read_model
+from fingertip.errors import InputError
 
 SIZE = mesh2d.Sizing2D(size_mm=0.25)        # coarse: the whole file runs in a few seconds
 

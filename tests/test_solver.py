@@ -10,10 +10,10 @@ from skfem import Basis, BilinearForm, asm
 from skfem.helpers import div
 
 from fem import InputError, Model
-from fem.verify import closed_forms as ref
 from fem.core.materials import Material
 from fem.core.measures import MEASURES
 from fem.io.vtu import write_solution
+from fem.verify import closed_forms as ref
 
 E = 0.01          # MPa (1e4 Pa)
 SYMMETRY_3D = {"sym_x": (0, None, None), "sym_y": (None, 0, None), "sym_z": (None, None, 0)}

@@ -51,12 +51,11 @@ def test_every_layer_wraps_round_the_tip(built):
 @pytest.fixture(scope="module")
 def force_displacement(built, tmp_path_factory):
     """The shipped scene on the tilted rounded monkey, plus a 3 mm punch: {name: (rows, surface)}."""
+    from dataclasses import replace
     from pathlib import Path
 
-    from dataclasses import replace
-
-    from fingertip.jobs.indent import indent_folder
     from fem.experiments.scene import Experiment, Output, load_scene
+    from fingertip.jobs.indent import indent_folder
 
     spec = load_scene(Path(pipeline.__file__).parent / "scenes" / "force_displacement.toml")
     punch = Experiment.from_dict({"name": "punch3", "indentor": "punch:3", "position_mm": "top",

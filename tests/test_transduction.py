@@ -8,10 +8,18 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from fingertip.errors import InputError
 from fem.receptors import transduction as tr
-from fem.receptors.transduction import (CLASSES, LIF_RATE_HZ, class_data, dynamic_input, post_spike_basis,
-                              rates_hz, resample, spike_trains)
+from fem.receptors.transduction import (
+    CLASSES,
+    LIF_RATE_HZ,
+    class_data,
+    dynamic_input,
+    post_spike_basis,
+    rates_hz,
+    resample,
+    spike_trains,
+)
+from fingertip.errors import InputError
 
 E_STAR = 0.05 / (1 - 0.4 ** 2)      # TouchSim skin: E = 0.05 MPa, nu = 0.4 -> E* = 0.0595 MPa
 PIN_MM = 1.0                        # flat pin radius of TouchSim's ramp regression tests

@@ -27,10 +27,15 @@ import gc
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.optimize import least_squares
 
-from fingertip.errors import InputError
-from fem.core.materials import FLUID_LAYER
+from fem.contact.indentors import CYLINDERS_MM, make_indentor
+from fem.contact.linear import ContactModel
+from fem.core.materials import FLUID_LAYER, Material
+from fem.io.modelfolder import CONTACT_REGION, factorise, read_model
 from fem.verify.closed_forms import beam_deflection, waterbed_deflection
+from fingertip.errors import InputError
+from fingertip.progress import as_progress
 
 N_LAYERS = 5
 
@@ -143,12 +148,9 @@ class DeflectionExperiment:
     workers rebuild this experiment from the model folder once each (`solve_material`). None:
     every material is solved here, when first asked for.
     """
-
     def __init__(self, model_dir, indentor: str = "wedge", orientation=None, position_mm=None,
                  nu=None, band_mm: float = 0.25, side: str = "mean", rigid_bone: bool = False,
                  max_factors: int = 4, progress=None, map=None):
-        from fingertip.progress import as_progress
-        from fem.io.modelfolder import CONTACT_REGION, read_model
 
         self.progress = as_progress(progress)
         self.map = map
@@ -181,8 +183,6 @@ class DeflectionExperiment:
 
     def indentor_for(self, code: str):
         """Indentor `code` placed as this experiment's (orientation, position, approach)."""
-        from fem.contact.indentors import make_indentor
-
         return make_indentor(code, **self._placement)
 
     def contact_model(self, log10_Pa):
@@ -223,10 +223,6 @@ class DeflectionExperiment:
 
     def _factorise(self, log10_Pa):
         """A new fem.contact.linear.ContactModel of the model with these log10 moduli [Pa] (one factorisation)."""
-        from fem.contact.linear import ContactModel
-        from fem.core.materials import Material
-        from fem.io.modelfolder import factorise
-
         nu = self.info.get("nu", 0.48) if self.nu is None else self.nu
         model = self._model.with_material(Material(moduli_MPa(log10_Pa), nu=nu, rigid_bone=self.rigid_bone))
         system = factorise(model, self.info, progress=self.progress)
@@ -335,8 +331,6 @@ def fit_free_length(distance_mm, deflection_mm, d0_mm=None, kind: str = "waterbe
     The 1-D search is a log grid over 0.05-200 mm refined by bounded least squares, so the kink
     of the waterbed curve at Lw cannot trap it in a poor local minimum.
     """
-    from scipy.optimize import least_squares
-
     if kind not in ("waterbed", "beam"):
         raise InputError(f"unknown idealised model '{kind}': use waterbed or beam")
     x, y = np.asarray(distance_mm, float), np.asarray(deflection_mm, float)
@@ -469,8 +463,6 @@ def cylinder_series(exp: DeflectionExperiment, material, codes=None, forces_N=No
     """Contact of the catalogue cylinders `codes` (default C1-C8, thesis table 5.1) placed as the
     experiment's indentor, at each force or each depth (one of the two), for a material (code or
     log10 moduli in Pa). One factorisation; the compliance columns are shared by all cylinders."""
-    from fem.contact.indentors import CYLINDERS_MM
-
     if (forces_N is None) == (depths_mm is None):
         raise InputError("give forces or depths for the cylinder series, not both")
     codes = list(CYLINDERS_MM) if codes is None else [str(c).strip().upper() for c in codes]

@@ -14,8 +14,15 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
+from fem.biomech.deflection import (
+    DeflectionExperiment,
+    Profile,
+    as_log10,
+    code_of,
+    parse_code,
+    ratio_key,
+)
 from fingertip.errors import InputError
-from fem.biomech.deflection import DeflectionExperiment, Profile, as_log10, code_of, parse_code, ratio_key
 
 
 @dataclass

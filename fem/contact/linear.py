@@ -52,9 +52,14 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as sla
 
-from fingertip.errors import InputError
-from fem.contact.compliance import Compliance, CondensedCompliance, FactorCompliance, RowCache
+from fem.contact.compliance import (
+    Compliance,
+    CondensedCompliance,
+    FactorCompliance,
+    RowCache,
+)
 from fem.core.linalg import SERIAL_BLAS_BELOW, blas_threads
+from fingertip.errors import InputError
 
 GAP_TOL_MM = 1e-8
 """Allowed penetration after deformation (mm) and the pivoting threshold on the gap."""

@@ -19,7 +19,16 @@ import meshio
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
-from skfem import Basis, ElementTetP1, ElementTetP2, ElementTriP1, ElementTriP2, ElementVector, MeshTet, MeshTri
+from skfem import (
+    Basis,
+    ElementTetP1,
+    ElementTetP2,
+    ElementTriP1,
+    ElementTriP2,
+    ElementVector,
+    MeshTet,
+    MeshTri,
+)
 
 from fem.core.fields import PointLocator
 from fem.core.materials import FLUID_LAYER

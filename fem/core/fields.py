@@ -49,7 +49,9 @@ class PointLocator:
             raise InputError(f"no elements in layer {layer}; the mesh has layers {sorted(set(m.layer))}")
         if len(x) == 0:
             return np.zeros(0, dtype=np.int64)
-        from scipy.spatial import cKDTree  # scipy.spatial costs 0.1 s of import: only where points are located
+        from scipy.spatial import (
+            cKDTree,  # scipy.spatial costs 0.1 s of import: only where points are located
+        )
 
         centroids = m.mesh.p[:, m.mesh.t[:, pool]].mean(axis=1).T
         _, idx = cKDTree(centroids).query(x, k=min(16, len(pool)))

@@ -20,13 +20,14 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import functools
-import os
 import logging
+import os
 import sys
 
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
+from scipy.sparse.linalg import splu
 
 from fingertip.errors import InputError
 
@@ -73,7 +74,6 @@ SERIAL_BLAS_BELOW = 1500
 thread: for such small matrices a second thread mostly waits for the other core, which is often
 busy, and can slow them several times over (a 201 x 201 Cholesky factorisation: a fraction of a
 millisecond on one thread, tenths of a second on two OpenBLAS threads of a loaded 2-core machine)."""
-
 
 def dense_threads(n: int):
     """`blas_threads` for dense work on an (n, n) matrix: one thread below SERIAL_BLAS_BELOW."""
@@ -136,9 +136,10 @@ class Pardiso:
     quasi-definite matrix). Raises pypardiso's PyPardisoError when PARDISO fails and
     np.linalg.LinAlgError for an empty row or an S that is not positive definite.
     """
-
     def __init__(self, upper: sp.csr_matrix, schur: np.ndarray | None = None, mkl_defaults: bool = False):
-        from pypardiso.pardiso_wrapper import PyPardisoError
+        from pypardiso.pardiso_wrapper import (
+            PyPardisoError,  # pypardiso (MKL) only where PARDISO runs
+        )
 
         self._error = PyPardisoError
         self._call = _mkl_pardiso()
@@ -275,7 +276,6 @@ def solve_refined(A: sp.spmatrix, b: np.ndarray) -> np.ndarray:
     floors a Newton iteration's residual at ~1e-7 of the reactions."""
     A = A.tocsr()
     if not _pardiso_available():
-        from scipy.sparse.linalg import splu
 
         lu = splu(A.tocsc())
         x = lu.solve(b)
@@ -345,7 +345,6 @@ class SaddleFactor:
     multiply by the whole matrices.
     A singular matrix raises InputError.
     """
-
     REFINE_TOL = 1e-10
     MAX_REFINE = 2
 
@@ -364,7 +363,6 @@ class SaddleFactor:
         if self._T is not None:
             Kdev, B = (self._T.T @ Kdev @ self._T).tocsr(), (B @ self._T).tocsr()
         if not _pardiso_available():
-            from scipy.sparse.linalg import splu
 
             A = sp.bmat([[Kdev, B.T], [B, -sp.diags(D)]], format="csc")
             self.backend, self._solve = "scipy-splu", splu(A).solve

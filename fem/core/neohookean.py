@@ -41,6 +41,7 @@ most the first size).
 """
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -73,7 +74,6 @@ class NeoHookean:
     """Nearly incompressible neo-Hookean solid on a `fem.core.model.Model` (3D tetrahedra or 2D plane
     strain; same mesh, layers, materials, regions and pressure space). Element work is done in
     chunks of `chunk` elements (the 3D tangent holds 900 numbers per element)."""
-
     def __init__(self, model, chunk: int = 4000):
         if (model.layer == FLUID_LAYER).any():
             raise InputError("the large-deformation solver has no fluid core (layer 6); "
@@ -186,8 +186,6 @@ class NeoHookean:
         A solve that cannot go on raises RuntimeError, or with partial=True returns the states
         reached with the reason in `stopped`. progress: optional `fingertip.progress` object (None:
         silent) told each converged step."""
-        import time
-
         progress = as_progress(progress)
         start = time.perf_counter()
         system = self.model.system(prescribed)

@@ -36,8 +36,8 @@ from __future__ import annotations
 
 import hashlib
 import json
-import shutil
 import logging
+import shutil
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -45,12 +45,12 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
-from fingertip.progress import as_progress
-from fingertip.staging import staged_output, write_json
 from fem.contact.compliance import Compliance, DenseReach, RowCache
 from fem.contact.linear import ContactModel, fe_facets
 from fem.io.modelfolder import CONDENSE_MAX_NODES, CONTACT_REGION, HELD, held_regions
 from fem.receptors.grid import ReceptorSampler
+from fingertip.progress import as_progress
+from fingertip.staging import staged_output, write_json
 
 logger = logging.getLogger(__name__)
 

@@ -23,8 +23,16 @@ from fem.contact.indentors import approach_direction, make_indentor
 from fem.contact.linear import ContactModel, reach
 from fem.experiments.response import ResponseStore, contact_model, stored_responses
 from fem.experiments.scene import AXES, Experiment, Receptors, Scene
-from fem.io.modelfolder import (CONDENSE_MAX_NODES, CONTACT_REGION, approach_down, factorise, folder_dim,
-                                folder_info, read_model, receptor_surface)
+from fem.io.modelfolder import (
+    CONDENSE_MAX_NODES,
+    CONTACT_REGION,
+    approach_down,
+    factorise,
+    folder_dim,
+    folder_info,
+    read_model,
+    receptor_surface,
+)
 from fem.io.runfolder import writes_pvd
 from fem.receptors.afferents import scene_responses
 from fem.receptors.grid import ReceptorSampler, receptor_grid

@@ -34,17 +34,20 @@ Every key is declared once, below, with its type, unit and default (`Scene`, `Re
 from __future__ import annotations
 
 import dataclasses
+import tomllib
 from dataclasses import dataclass
 
 import numpy as np
 
-from fingertip.declare import declared, finite, nonnegative, positive
-from fingertip.errors import InputError
-from fem.contact.linear import MAX_DEPTH_MM
 from fem.contact.indentors import orientation_deg, shapes_for
+from fem.contact.linear import MAX_DEPTH_MM
 from fem.core.materials import Material
 from fem.core.measures import check_names
+from fem.experiments.traces import check, fractions
 from fem.receptors.grid import DEFAULT_DEPTHS_MM, DEFAULT_MEASURES
+from fem.receptors.transduction import class_data
+from fingertip.declare import declared, finite, nonnegative, positive
+from fingertip.errors import InputError
 
 AXES = {"x": 0, "y": 1, "z": 2}
 
@@ -288,7 +291,6 @@ class Trace:
 
     @classmethod
     def from_dict(cls, table, where: str) -> Trace:
-        from fem.experiments.traces import check
 
         trace = cls(**_parse_table(cls, table, f"{where} trace"))
         check(trace, where)
@@ -310,7 +312,6 @@ class Afferents:
 
     @classmethod
     def from_dict(cls, table) -> Afferents:
-        from fem.receptors.transduction import class_data
 
         kw = _parse_table(cls, table, "[afferents]")
         for name in kw.get("classes", ()):
@@ -421,8 +422,6 @@ class Experiment:
 
     def _samples(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(times (n,) s, offsets (n, 3) mm, fractions (n,)) of the trace's sample times."""
-        from fem.experiments.traces import fractions
-
         sweep = self.offsets_mm if self.sweep is not None else None
         times, frac = fractions(self.trace, sweep)
         return times, (sweep if sweep is not None else np.zeros((len(frac), 3))), frac
@@ -478,8 +477,6 @@ class Scene:
 
 def load_scene(path) -> Scene:
     """Read a TOML scene file (`Scene.from_dict`)."""
-    import tomllib
-
     try:
         with open(path, "rb") as fh:
             d = tomllib.load(fh)

@@ -25,11 +25,13 @@ import json
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
+import igl
 import numpy as np
+from scipy.spatial import ConvexHull
 
+from fem.geometry.presets import FINGERTIP_PRESETS, make_shape
 from fingertip.declare import declared, finite, nonnegative, positive
 from fingertip.errors import InputError
-from fem.geometry.presets import FINGERTIP_PRESETS, make_shape
 
 N_LAYERS = 5
 #: Per-preset layer-3 thickness and bone offset (not in the thesis; the monkey section is too thin
@@ -101,7 +103,6 @@ class ModelParams:
         thesis's model); None: the length of the data (`model_from_args`: the preset's cap, or the
         sections beyond the body).
     """
-
     epidermis_mm: float = declared(0.5, "mm", "epidermis thickness", text=positive)
     dermis_mm: float = declared(1.0, "mm", "dermis thickness", text=positive)
     layer3_mm: float | None = declared(None, "mm", "layer 3 volar thickness at the reference sections; sets the "
@@ -166,7 +167,6 @@ class ModelParams:
 class LayeredModel:
     """The layered solid. z_mm: (K,); rings: (K, 5, N, 2) interface curves (x, y) in mm;
     centroids: (K, 2) section centroids (the ray origin)."""
-
     z_mm: np.ndarray
     rings: np.ndarray
     centroids: np.ndarray
@@ -375,7 +375,6 @@ def check_polygon(points: np.ndarray, where: str) -> np.ndarray:
         raise InputError(f"{where}: the section has zero area")
     if area < 0:
         p = p[::-1]
-    from scipy.spatial import ConvexHull
 
     hull = ConvexHull(p)
     if hull.volume > 1.01 * abs(area):
@@ -539,8 +538,6 @@ def _dome_lengths(tip_mm, skin, f3, bone_ratio, outer_ring, centre, N) -> dict:
 def _check_dome_nesting(model: LayeredModel) -> list[float]:
     """Each dome strictly inside the next outer shell: min distance (mm) of dome i+1's vertices
     from shell i, i = 0..3. Raises InputError where they touch or cross."""
-    import igl
-
     v = model.vertices()
     _, _, levels, apex = model._vertex_index()
     out = []

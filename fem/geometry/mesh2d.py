@@ -16,13 +16,17 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
 
+import meshio
 import numpy as np
+from matplotlib.path import Path as MplPath
+from scipy.spatial import Delaunay, cKDTree
 
+from fem.core.materials import FLUID_LAYER
+from fem.geometry.mesh3d import check_sizes
 from fingertip.declare import declared, positive
 from fingertip.errors import InputError
 from fingertip.progress import as_progress
 from fingertip.staging import staged_output, write_json
-from fem.core.materials import FLUID_LAYER
 
 #: Solid layer around the fluid core of the solid-fluid cylinders (thesis 4.6), mm.
 SOLID_FLUID_SHELL_MM = 1.0
@@ -32,14 +36,12 @@ SOLID_FLUID_SHELL_MM = 1.0
 class Sizing2D:
     """size_mm in the top fine_depth_mm under the contact surface, growing by `growth` mm per mm
     of distance from that zone up to coarse_mm (also capped by each layer's thinnest part)."""
-
     size_mm: float = declared(0.125, "mm", "target edge length on the volar skin (3D) or top surface (2D)", text=positive)
     coarse_mm: float = declared(1.0, "mm", "largest edge length", text=positive)
     growth: float = declared(0.5, "mm per mm", "edge length growth per mm away from the fine zone", text=positive)
     fine_depth_mm: float = declared(1.0, "mm", "depth of the fine zone below the volar (3D) or top (2D) surface", text=positive)
 
     def check(self) -> None:
-        from fem.geometry.mesh3d import check_sizes
 
         check_sizes(self, 0.01)
 
@@ -50,7 +52,6 @@ class Domain2D:
     number between curve i and curve i+1 (the last: inside the last curve).
     surface(points) / fixed(points) -> bool masks for boundary points; depth(points) -> mm below
     the contact surface (inf where not under it)."""
-
     name: str
     curves: list
     layers: list
@@ -129,7 +130,6 @@ def section_domain(model, z_mm: float) -> Domain2D:
     volar = lambda q: _angle_mask(q, c, np.pi / 2, p.volar_span_deg)  # noqa: E731
 
     def depth(q):
-        from matplotlib.path import Path as MplPath
 
         d = _polyline_distance(q, rings[0])
         return np.where(volar(q) & MplPath(rings[0]).contains_points(q, radius=1e-9), d, np.inf)
@@ -156,7 +156,6 @@ def _polyline_distance(q: np.ndarray, poly: np.ndarray) -> np.ndarray:
 
 
 def _inside(q: np.ndarray, poly: np.ndarray) -> np.ndarray:
-    from matplotlib.path import Path as MplPath
 
     return MplPath(poly).contains_points(q)
 
@@ -190,7 +189,6 @@ def target_size(domain: Domain2D, sizing: Sizing2D, q: np.ndarray) -> np.ndarray
     # approximated by their distance to the nearest fine-zone sample point
     far = ~np.isfinite(d)
     if far.any():
-        from scipy.spatial import cKDTree
 
         outer = _resample(domain.curves[0], sizing.size_mm)
         zone = outer[domain.surface(outer)]
@@ -220,7 +218,6 @@ def _sample_curve(poly: np.ndarray, h_at, cap: float) -> np.ndarray:
     pts = dense[idx]
     corners = _corners(poly)
     if len(corners):
-        from scipy.spatial import cKDTree
 
         _, j = cKDTree(pts).query(corners)
         pts[j] = corners                                     # snap the nearest sample to each corner
@@ -237,8 +234,6 @@ def _corners(poly: np.ndarray) -> np.ndarray:
 def mesh_domain(domain: Domain2D, sizing: Sizing2D):
     """-> (points (P, 2), triangles (T, 3) CCW, layer (T,) int32). Raises RuntimeError if an
     interface is not recovered as mesh edges."""
-    from scipy.spatial import Delaunay, cKDTree
-
     sizing.check()
     caps = _layer_caps(domain)
     if len(domain.curves) > 1:
@@ -353,8 +348,6 @@ def boundary_points(tri: np.ndarray, n_points: int) -> np.ndarray:
 def run_mesh2d(out_dir, domain: Domain2D, sizing: Sizing2D, progress=None):
     """Mesh, check and write mesh.vtu + model.json; returns ((points, triangles, layer, flags), report).
     progress: optional `fingertip.progress` object, or True for one on stderr (None, False: silent)."""
-    import meshio
-
     with as_progress(progress).task(f"meshing 2D {domain.name} (top size {sizing.size_mm} mm)"):
         pts, tri, layer = mesh_domain(domain, sizing)
     on_b = boundary_points(tri, len(pts))

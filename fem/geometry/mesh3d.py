@@ -14,19 +14,22 @@ from __future__ import annotations
 
 import hashlib
 import json
+import multiprocessing
 import os
 import signal
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+import igl
+import meshio
 import numpy as np
 
+from fem.geometry.layered import N_LAYERS, LayeredModel, check_positive
 from fingertip.declare import declared, positive
 from fingertip.errors import InputError
 from fingertip.progress import as_progress, cache_root
 from fingertip.staging import atomic_write, staged_output, write_json
-from fem.geometry.layered import N_LAYERS, LayeredModel, check_positive
 
 #: bump when tetrahedralize() changes, so cached meshes are not reused
 MESHER_VERSION = 1
@@ -41,7 +44,6 @@ class Sizing:
     envelope (max distance of the meshed interfaces from the model surfaces). opt_iter: pytetwild
     optimisation passes.
     """
-
     size_mm: float = declared(0.5, "mm", "target edge length on the volar skin (3D) or top surface (2D)", text=positive)
     coarse_mm: float = declared(3.0, "mm", "largest edge length", text=positive)
     growth: float = declared(0.5, "mm per mm", "edge length growth per mm away from the fine zone", text=positive)
@@ -73,14 +75,12 @@ def check_sizes(sizing, min_size_mm: float) -> None:
 class TetMesh:
     """points (P, 3) mm; tets (T, 4) positive orientation; layer (T,) int32 1..5;
     tags: region name -> (P,) uint8 flags on boundary vertices."""
-
     points: np.ndarray
     tets: np.ndarray
     layer: np.ndarray
     tags: dict
 
     def to_meshio(self):
-        import meshio
 
         return meshio.Mesh(self.points, [("tetra", self.tets.astype(np.int64))],
                            cell_data={"layer": [self.layer.astype(np.int32)]},
@@ -110,11 +110,10 @@ def sizing_values(model: LayeredModel, sizing: Sizing, points: np.ndarray) -> np
 BACKGROUND_SPACING_MM = 0.75
 """Grid step of the background sizing mesh."""
 
-
 def background_mesh(model: LayeredModel, sizing: Sizing, spacing_mm: float = BACKGROUND_SPACING_MM):
     """Regular tetrahedral grid over the model's bounding box with the target sizes at its points:
     (points (n, 3), tets (m, 4) int32, values (n,))."""
-    import pyvista as pv
+    import pyvista as pv  # 0.17 s of import, which a mesh from the cache does without
 
     v = model.vertices()
     lo, hi = v.min(0) - spacing_mm, v.max(0) + spacing_mm
@@ -152,7 +151,7 @@ def tetrahedralize(model: LayeredModel, sizing: Sizing, threads: int = 0):
 
 def _tetwild(kwargs):
     """pytetwild.tetrahedralize(**kwargs): (points (P, 3), tets (T, 4)); run by `in_worker`."""
-    import pytetwild
+    import pytetwild  # 0.17 s of import: only where the mesh is built (a worker process)
 
     return pytetwild.tetrahedralize(**kwargs)
 
@@ -171,16 +170,12 @@ def in_worker(func, *args):
     in the caller's process killed it on the spot, without the one-line message or any cleanup.
     In a worker the caller keeps its handlers and waits interruptibly; on any exception
     (KeyboardInterrupt included) the worker is terminated."""
-    import multiprocessing
-
     with multiprocessing.get_context("spawn").Pool(1, initializer=_worker_init) as pool:
         return pool.apply_async(func, args).get()
 
 
 def label_tets(model: LayeredModel, points: np.ndarray, tets: np.ndarray) -> np.ndarray:
     """(T,) int32 layer of each tet: the number of shells containing its centroid (0 = outside)."""
-    import igl
-
     v = model.vertices()
     c = points[tets].mean(axis=1)
     lab = np.zeros(len(tets), np.int32)
@@ -274,8 +269,6 @@ def straddle_check(model: LayeredModel, points: np.ndarray, tets: np.ndarray, la
     """Tets that reach across a layer interface: a tet of layer L must have all vertices inside (or
     within tol_mm of) shell L-1 and outside (or within tol_mm of) shell L. Returns the count beyond
     tol_mm and the deepest crossing in mm."""
-    import igl
-
     v = model.vertices()
     d = np.empty((N_LAYERS, len(points)))
     for i in range(N_LAYERS):
@@ -350,7 +343,7 @@ def cache_dir() -> Path:
 def mesh_key(model: LayeredModel, sizing: Sizing) -> str:
     """sha256 of everything the tets depend on: the layer surfaces (rings, z, tip), sizing, mesher.
     Region parameters are left out: they change the tags, not the tets."""
-    import pytetwild
+    import pytetwild  # its version is part of the key; 0.17 s of import, paid once a command meshes
 
     h = hashlib.sha256()
     h.update(np.ascontiguousarray(model.rings).tobytes())
@@ -412,7 +405,6 @@ def build_mesh(model: LayeredModel, sizing: Sizing, force: bool = False, progres
 class CacheEntryError(Exception):
     """A mesh cache entry that cannot be used (truncated, not an .npz, wrong arrays)."""
 
-
 def read_cache_entry(path) -> tuple[np.ndarray, np.ndarray]:
     """(points (P, 3) mm, tets (T, 4)) of a cache entry; CacheEntryError if it is unreadable or
     its arrays are not a tet mesh. Entries are written atomically (`build_mesh`), so a bad one
@@ -431,8 +423,6 @@ def read_cache_entry(path) -> tuple[np.ndarray, np.ndarray]:
 
 def write_mesh(out_dir, model: LayeredModel, sizing: Sizing, mesh: TetMesh, rep: dict, info: dict) -> None:
     """Write mesh.vtu and model.json into out_dir atomically."""
-    import meshio
-
     data = model.to_json()
     data.update({"inputs_key": inputs_key(model, sizing), "sizing": asdict(sizing),
                  "mesh": {**rep, "cache_key": info["key"], "from_cache": info["cached"], "mesh_seconds": info["mesh_s"],

@@ -9,6 +9,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.integrate import simpson
+from scipy.spatial import ConvexHull
 
 from fingertip.errors import InputError
 
@@ -37,7 +39,6 @@ class Shape:
     z_range_mm: (z0, z1) of the body; rod_radius_mm: mounting rod radius (0: none), the rod runs
     along the axis from below the body into it.
     """
-
     name: str
     z_range_mm: tuple[float, float]
     rod_radius_mm: float = 0.0
@@ -61,8 +62,6 @@ class Shape:
 
     def convex_section(self, z_mm: float, n: int = 720) -> np.ndarray:
         """Convex hull of the section, CCW: what tangent-envelope reconstruction can recover."""
-        from scipy.spatial import ConvexHull
-
         pts = self.section(z_mm, n)
         if len(pts) < 3:
             return pts
@@ -78,8 +77,6 @@ class Shape:
 
     def volume_mm3(self, z_lo: float, z_hi: float, convex: bool = True, n_z: int = 201) -> float:
         """Volume between two axial positions (Simpson's rule on section areas)."""
-        from scipy.integrate import simpson
-
         z = np.linspace(z_lo, z_hi, n_z)
         return float(simpson([self.area_mm2(zi, convex=convex) for zi in z], x=z))
 
@@ -104,7 +101,6 @@ class Fingertip(Shape):
     """Parametric fingertip: elliptic pad side, flattened (superellipse) nail side, section centre
     off the rotation axis, slight taper along z, ellipsoidal distal cap; optional concave dorsal
     groove (a nail-fold-like dent) that tangent-envelope reconstruction cannot see."""
-
     def __init__(self, preset: str = "human", groove: bool = False):
         if preset not in FINGERTIP_PRESETS:
             raise InputError(f"unknown fingertip preset '{preset}': use one of {sorted(FINGERTIP_PRESETS)}")
@@ -134,7 +130,6 @@ class Fingertip(Shape):
 
 class Ellipsoid(Shape):
     """Ellipsoid with semi-axes (a, b, c) along x, y, z, centred at (cx, cy, 0); a sphere if a=b=c."""
-
     def __init__(self, name, a, b, c, centre=(0.0, 0.0), rod_radius=0.0):
         super().__init__(name, (-c, c), rod_radius, dict(a=a, b=b, c=c, centre=centre))
 

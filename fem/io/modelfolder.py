@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fem.core.model import Model
 from fingertip.errors import InputError
 from fingertip.progress import as_progress
 
@@ -30,14 +31,11 @@ CONTACT_REGION = {3: "volar", 2: "surface"}
 CONDENSE_MAX_NODES = 8000
 """Largest candidate set whose dense compliance `factorise` stores (8000 nodes: 0.5 GB, k^3 flops)."""
 
-
 def read_model(model_dir, material=None, nu=None):
     """(fem.core.model.Model, model.json dict) of a model folder; material and nu default to model.json's.
 
     A 3D model with a `proximal` cut gets the region `proximal_core`: the cut's vertices outside
     the skin layers (SKIN_LAYERS), which HELD fixes."""
-    from fem.core.model import Model
-
     folder = Path(model_dir)
     info = folder_info(folder)
     model = Model.from_mesh(folder / "mesh.vtu", material=material or info.get("material", "m33338"),

@@ -16,22 +16,23 @@ from __future__ import annotations
 import csv
 import hashlib
 import json
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict
 from importlib import metadata
 from pathlib import Path
 
 import numpy as np
 
+from fem.core.measures import base_measure
+from fem.io.vtu import vtu_mesh, write_mesh
 from fingertip.errors import InputError
 from fingertip.staging import write_json
 from fingertip.tables import columns_of, write_csv
-from fem.core.measures import base_measure
 
 RUN_FORMAT = 1
 """Version of the run.json layout (raise it when a key changes meaning)."""
 RECEPTOR_COLUMNS = ("step", "site", "x_mm", "y_mm", "z_mm", "depth_mm")
 """Columns of `<name>_receptors.csv` that are not measures."""
-
 
 # --------------------------------------------------------------------------- run.json
 def experiment_record(run) -> dict:
@@ -103,7 +104,6 @@ def afferents_record(population, responses) -> dict | None:
 AFFERENT_FILES = ("afferents.csv", "spikes.csv", "inputs.csv")
 """Files of a traced experiment's afferents, in the folder <experiment name>/ (`write_afferents`)."""
 
-
 def afferent_tables(resp) -> dict:
     """{"afferents", "spikes", "inputs": {column: values}} of a fem.receptors.afferents.PopulationResponse:
     one row per afferent (site, depth, spike count, mean rate over the course), per spike, and per
@@ -139,7 +139,6 @@ def write_afferents(folder, resp) -> dict:
 # --------------------------------------------------------------------------- writer
 PVD_DEFAULT_MAX = 20
 """An experiment writes a PVD series by default when it has at most this many indentations."""
-
 
 def writes_pvd(output, indentations: int) -> bool:
     """Whether an experiment of `indentations` indentations writes a PVD series under a scene's
@@ -236,10 +235,6 @@ def pvd_times(run) -> tuple[list[float], str]:
 def _write_pvd(folder, run, scene_run) -> None:
     """<name>_<step>.vtu with the full fields of every indentation and the <name>.pvd series, its
     timestep values as `pvd_times` says."""
-    from concurrent.futures import ThreadPoolExecutor
-
-    from fem.io.vtu import vtu_mesh, write_mesh
-
     comp = scene_run.contact.compliance(run.indentor.approach)
     U = comp.displacement(np.stack([r.force_N for _, r in run.steps], axis=1))   # one solve, k loads
     names = [f"{run.name}_{i:03d}.vtu" for i in range(len(run.steps))]
@@ -264,7 +259,6 @@ class IndentRun:
 
     Receptor sites are identified by the `site` column (the same id at every depth, step and
     position). `diameter_mm` (2D cylinders) and each stimulus's sweep axis come from run.json."""
-
     def __init__(self, folder, diameter_mm: float | None = None):
         self.folder = Path(folder)
         if not self.folder.is_dir():

@@ -25,7 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fingertip.errors import InputError
+from fem.io.modelfolder import pad_nodes
+from fem.receptors.grid import ReceptorGrid, ReceptorSampler
 from fem.receptors.transduction import (
     class_data,
     dynamic_input,
@@ -34,6 +35,7 @@ from fem.receptors.transduction import (
     skin_E_star_MPa,
     spike_trains,
 )
+from fingertip.errors import InputError
 
 
 @dataclass(frozen=True)
@@ -64,8 +66,6 @@ def place(model, surface, classes=("SA1", "RA"), density_per_cm2=None, centre_mm
     one of the class's published models at random. surface: the contact region's
     fem.core.model.SurfaceNodes; density_per_cm2: {class: density} overriding the fingertip densities;
     centre_mm (3,), radius_mm: only the pad within radius_mm of centre_mm."""
-    from fem.io.modelfolder import pad_nodes
-
     if model.dim != 3:
         raise InputError("afferents lie over a pad: they need a 3D model (a 2D section has no pad area)")
     rng = np.random.default_rng(seed)
@@ -96,8 +96,6 @@ def place(model, surface, classes=("SA1", "RA"), density_per_cm2=None, centre_mm
 
 def sampler_of(model, population: Population):
     """fem.receptors.grid.ReceptorSampler at the afferents (one point each, in their order)."""
-    from fem.receptors.grid import ReceptorGrid, ReceptorSampler
-
     n = len(population)
     return ReceptorSampler(model, ReceptorGrid(population.points_mm, population.depth_mm, np.arange(n),
                                                population.site_mm))

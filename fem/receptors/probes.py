@@ -16,8 +16,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fingertip.errors import InputError
+from fem.contact.indentors import make_indentor
+from fem.contact.linear import ContactModel
 from fem.core.measures import base_measure
+from fem.io.modelfolder import open_model
+from fem.receptors.grid import ReceptorGrid, ReceptorSampler
+from fingertip.errors import InputError
 
 
 # --------------------------------------------------------------------------- receptive fields
@@ -137,11 +141,7 @@ class Probe2D:
     sites_x_mm: lateral positions of the receptor sites; depths_mm: depths along the inward surface
     normal (interpolated between surface nodes). `measure(indentor, offsets, name, **load)` ->
     (k_positions, n_depths, n_sites) values."""
-
     def __init__(self, model_dir, sites_x_mm, depths_mm=(0.75,), material=None):
-        from fem.contact.linear import ContactModel
-        from fem.io.modelfolder import open_model
-        from fem.receptors.grid import ReceptorGrid, ReceptorSampler
 
         model, system, region, self.info = open_model(model_dir, material)
         if model.dim != 2:
@@ -185,8 +185,6 @@ def point_load_field(probe: Probe2D, candidate: str, positions_mm, depth_mm=1.0,
     load (a line load in 2D: the sharp wedge) swept over positions_mm, indented depth_mm at each.
     threshold: absolute; default threshold_frac * the largest value of the sweep (the thesis's
     threshold is arbitrary, and the field size depends on it)."""
-    from fem.contact.indentors import make_indentor
-
     ind = make_indentor(indentor, orientation="parallel", position_mm=(0.0, 0.0))
     vals, _ = probe.measure(ind, positions_mm, [candidate], depth_mm=depth_mm)
     k = int(np.argmin(np.abs(probe.sites_x_mm - site_x_mm)))
@@ -206,8 +204,6 @@ def two_point_curves(probe: Probe2D, separations_mm, depth_mm=0.5, candidate="se
     ("alone_displacement", "alone_force"): on a curved finger the load position alone changes the
     value, and two / alone isolates the interaction of the two loads.
     Returns {"separation_mm", "displacement", "force", "force_per_load_N", "depth_force_mm", ...}."""
-    from fem.contact.indentors import make_indentor
-
     single = make_indentor(f"two-point:0{tip}", orientation="parallel")
     f0 = probe.contact.indent(single, depth_mm=depth_mm).total_force_N
     disp, force, dforce, alone_d, alone_f = [], [], [], [], []
@@ -236,8 +232,6 @@ def gap_analysis(probe: Probe2D, bar_mm, gaps_mm, depth_mm=1.0, candidate="abs:s
     centred over x = 0 and indented depth_mm; the candidate across the probe's receptors (first
     depth) and its peaks on both sides of the gap. Returns rows (gap, x_left, x_right, distance,
     slope) and the profiles."""
-    from fem.contact.indentors import make_indentor
-
     rows, profiles = [], []
     for g in gaps_mm:
         half = bar_mm + 0.5 * g

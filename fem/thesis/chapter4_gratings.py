@@ -12,7 +12,6 @@ from fem.receptors.probes import gap_analysis
 from fem.thesis.chapter4_receptors import CENTRE, SITES_MM, receptor_probe
 from fem.thesis.findings import DIFFERS, REPRODUCED, Finding, Series, Workshop
 
-
 # ----------------------------------------------------------------------------- 4.5: gratings
 GRATING_BAR_MM = 0.5
 #: Models of the grating runs: model folder, label, material.

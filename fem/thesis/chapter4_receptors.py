@@ -9,10 +9,14 @@ import numpy as np
 
 from fem.contact.indentors import make_indentor
 from fem.core.materials import Material
-from fem.receptors.probes import Probe2D, receptive_field, settling_separation, two_point_curves
+from fem.receptors.probes import (
+    Probe2D,
+    receptive_field,
+    settling_separation,
+    two_point_curves,
+)
 from fem.thesis.chapter4_mechanics import LINE_LOAD_MODELS
 from fem.thesis.findings import DIFFERS, REPRODUCED, Finding, Series, Workshop
-
 
 # ----------------------------------------------------------------------------- 4.2-4.5: receptors
 #: Thesis candidates for the SA-I relevant stimulus in figures 4-3, 4-4 and 4-7 (fem.core.measures names).

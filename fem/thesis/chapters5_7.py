@@ -8,13 +8,24 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fem.biomech.deflection import DeflectionExperiment, cylinder_series, layer_study, side_profile
+from fem.biomech.deflection import (
+    DeflectionExperiment,
+    cylinder_series,
+    layer_study,
+    side_profile,
+)
 from fem.biomech.line_load import compare_line_load
 from fem.contact.indentors import STEP_HALF_WAVELENGTH_MM, make_indentor
 from fem.contact.linear import ContactModel, reach
 from fem.geometry.layered import model_from_args, params_for
 from fem.geometry.mesh2d import section_domain
-from fem.io.modelfolder import CONTACT_REGION, approach_down, factorise, open_model, read_model
+from fem.io.modelfolder import (
+    CONTACT_REGION,
+    approach_down,
+    factorise,
+    open_model,
+    read_model,
+)
 from fem.receptors.grid import ReceptorGrid, ReceptorSampler
 from fem.thesis.chapter4_receptors import BAR_WIDTH_MM
 from fem.thesis.findings import DIFFERS, REPRODUCED, Finding, Series, Workshop

@@ -6,9 +6,25 @@ fem.thesis.chapter4_gratings (4.5) hold chapter 4, fem.thesis.chapters5_7 chapte
 from __future__ import annotations
 
 from fem.thesis.chapter4_gratings import aperiodic_gratings, gap_detection
-from fem.thesis.chapter4_mechanics import appendices, cylinders, flamant_block, line_load_order
-from fem.thesis.chapter4_receptors import point_load_fields, rectangular_bars, two_point_resolution
-from fem.thesis.chapters5_7 import bars_3d, contact_vs_diameter, dorsal_half, layer_effects, sections_2d_3d, steps_3d
+from fem.thesis.chapter4_mechanics import (
+          appendices,
+          cylinders,
+          flamant_block,
+          line_load_order,
+)
+from fem.thesis.chapter4_receptors import (
+          point_load_fields,
+          rectangular_bars,
+          two_point_resolution,
+)
+from fem.thesis.chapters5_7 import (
+          bars_3d,
+          contact_vs_diameter,
+          dorsal_half,
+          layer_effects,
+          sections_2d_3d,
+          steps_3d,
+)
 
 #: (name, function, what it needs) in thesis order; `pipeline.py reproduce` runs them all.
 CLAIMS = (("flamant", flamant_block), ("receptive_fields", point_load_fields), ("two_point", two_point_resolution),

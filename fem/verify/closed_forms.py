@@ -8,6 +8,7 @@ Meshes are returned as (points (N, dim), cells (M, dim + 1), regions {name: bool
 from __future__ import annotations
 
 import numpy as np
+from skfem import MeshTet, MeshTri
 
 
 # --------------------------------------------------------------------------- closed forms
@@ -192,8 +193,6 @@ def box(xs, ys, zs=None):
     """Structured box on the grids xs, ys (, zs): triangles (2D) or tetrahedra (3D).
 
     Regions: xmin, xmax, ymin, ymax (, zmin, zmax)."""
-    from skfem import MeshTet, MeshTri
-
     m = MeshTri.init_tensor(xs, ys) if zs is None else MeshTet.init_tensor(xs, ys, zs)
     pts = m.p.T
     regions = {}
@@ -250,7 +249,6 @@ def fine_then_growing(fine_mm, fine_len_mm, growth, total_mm):
 # --------------------------------------------------------------------------- line-load deflection (thesis 6.2.1)
 WATERBED_PER_BEAM = 8.0 / 3.0
 """Lw / Lb at which the waterbed and beam profiles agree to first order near the load (thesis 6.2.1)."""
-
 
 def waterbed_deflection(x_mm, d0_mm, Lw_mm):
     """Waterbed model (Srinivasan 1989, thesis eq. 6.1): a membrane enclosing an incompressible

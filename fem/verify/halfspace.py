@@ -40,6 +40,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fem.contact.indentors import make_indentor
+from fem.contact.linear import ContactModel, reach
+from fem.core.model import Model
 from fem.verify.closed_forms import _prisms_to_tets, box, fine_then_growing
 
 APPROACH = np.array([0.0, -1.0, 0.0])
@@ -51,13 +54,11 @@ RING_SHRINK = 1e-12
 """Relative inward shift of the punch-edge ring: its vertices must count as under the punch
 (fem.contact.indentors.Punch takes r <= a), which rounding in the mapping would otherwise decide."""
 
-
 @dataclass
 class HalfSpaceBlock:
     """A factorised elastic block: what `fem.contact.linear.ContactModel.from_fe` consumes (`model`,
     `system`, `region`), the punch radius, the constraints, and the symmetry factor (4 for a
     quarter block: the whole punch carries `symmetry` times the model's force)."""
-
     model: object               # fem.core.model.Model
     system: object              # fem.core.system.LinearSystem, punch footprint condensed along -y
     region: str                 # contact region: "top"
@@ -67,15 +68,11 @@ class HalfSpaceBlock:
 
     def punch(self):
         """The flat punch of this radius on the block's axis (fem.contact.indentors; approach -y)."""
-        from fem.contact.indentors import make_indentor
-
         return make_indentor(f"punch:{2 * self.radius_mm!r}")
 
     def contact(self, observe=None):
         """fem.contact.linear.ContactModel on the top face; observe: optional sparse (r, ndof) operator
         (e.g. `model.stress_operator(points)`) whose response comes with each indentation."""
-        from fem.contact.linear import ContactModel
-
         return ContactModel.from_fe(self.model, self.system, self.region, observe=observe)
 
 
@@ -156,9 +153,6 @@ def flat_block_model(half_width_mm=80.0, depth_mm=80.0, fine_mm=0.25, radius_mm=
     (both FINE_RADII radii by default); beyond, the plan rings grow by `growth` and the layers
     by `depth_growth` per element. E_MPa, nu: the material (defaults TouchSim's, 0.05 MPa, 0.4).
     round_punch: O-grid plan with the punch edge a ring of vertices; False: a tensor grid."""
-    from fem.contact.linear import reach
-    from fem.core.model import Model
-
     if sides not in ("free", "held", "roller"):
         raise ValueError(f"sides must be 'free', 'held' or 'roller', got {sides!r}")
     a, W, D = float(radius_mm), float(half_width_mm), float(depth_mm)

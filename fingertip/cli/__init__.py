@@ -11,14 +11,13 @@ behind them take 1.3 s to import, one 0.1-0.7 s, and `--help` alone 0.1 s.
 """
 from __future__ import annotations
 
+import importlib
 import logging
 import os
 import signal
 import sys
 import traceback
 from pathlib import Path
-
-import importlib
 
 from fingertip.cli.options import Parser
 from fingertip.errors import InputError

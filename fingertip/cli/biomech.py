@@ -7,9 +7,20 @@ import argparse
 from pathlib import Path
 
 from fem.experiments.scene import Scene, parse_values
+from fingertip.cli.options import (
+    FINITE,
+    POSITIVE,
+    UNSET,
+    add_declared,
+    scheduler_option,
+)
 from fingertip.errors import InputError
-from fingertip.cli.options import FINITE, POSITIVE, UNSET, add_declared, scheduler_option
-from fingertip.jobs.biomech import run_contact_series, run_fit_material, run_line_load, run_study_layers
+from fingertip.jobs.biomech import (
+    run_contact_series,
+    run_fit_material,
+    run_line_load,
+    run_study_layers,
+)
 
 
 def integers(what: str):

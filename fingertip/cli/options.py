@@ -10,8 +10,15 @@ from __future__ import annotations
 import argparse
 import dataclasses
 
+from fingertip.declare import (
+    bare_name,
+    default_of,
+    field_of,
+    finite,
+    nonnegative,
+    positive,
+)
 from fingertip.distribute import INSTALL_HINT
-from fingertip.declare import bare_name, default_of, field_of, finite, nonnegative, positive
 from fingertip.errors import InputError
 
 

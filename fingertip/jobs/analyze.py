@@ -7,14 +7,13 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from fem import plots
+from fem.io.runfolder import IndentRun
+from fem.receptors.analysis import UnitAnalysis, analyze, as_runs
+from fem.receptors.neural import NeuralData, read_neural_csv
 from fingertip.errors import InputError
 from fingertip.staging import check_output_dir, staged_output, write_json
 from fingertip.tables import columns_of, write_csv, write_markdown
-from fem import plots
-from fem.receptors.analysis import UnitAnalysis, analyze, as_runs
-from fem.receptors.neural import read_neural_csv
-from fem.receptors.neural import NeuralData
-from fem.io.runfolder import IndentRun
 
 DPI = 110
 FLOAT_FORMAT = "%.6g"

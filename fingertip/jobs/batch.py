@@ -203,7 +203,7 @@ def run_batch(subjects: list[Subject], scene_path, out_dir, mesh: MeshOptions = 
               scheduler: str | None = None, force: bool = False, progress: bool = True) -> str:
     """`pipeline.py batch`: every subject through the scene, then out_dir/summary.csv and
     cohort.png; returns the summary text. Checks everything first (`check_batch`)."""
-    from fem import plots    # matplotlib: 0.4 s of import, not needed by the tasks
+    from fem import plots  # matplotlib: 0.4 s of import, not needed by the tasks
 
     _, sched = check_batch(subjects, scene_path, out_dir, mesh, scheduler)
     out = Path(out_dir)

@@ -11,12 +11,6 @@ import time
 
 import numpy as np
 
-from fingertip.distribute import parse_scheduler, require_dask
-from fingertip.errors import InputError
-from fingertip.jobs.tasks import task_map
-from fingertip.progress import as_progress
-from fingertip.staging import check_output_dir, staged_output, write_json
-from fingertip.tables import write_csv
 from fem import plots
 from fem.biomech.deflection import (
     DeflectionExperiment,
@@ -27,10 +21,16 @@ from fem.biomech.deflection import (
     parse_code,
 )
 from fem.biomech.fit import fit_force_scale, fit_material, profile_residuals
-from fem.contact.indentors import orientation_deg, shapes_for
-from fem.biomech.measured import read_deflection_csv, read_force_csv
-from fem.io.modelfolder import folder_info
 from fem.biomech.line_load import compare_line_load
+from fem.biomech.measured import read_deflection_csv, read_force_csv
+from fem.contact.indentors import orientation_deg, shapes_for
+from fem.io.modelfolder import folder_info
+from fingertip.distribute import parse_scheduler, require_dask
+from fingertip.errors import InputError
+from fingertip.jobs.tasks import task_map
+from fingertip.progress import as_progress
+from fingertip.staging import check_output_dir, staged_output, write_json
+from fingertip.tables import write_csv
 
 DPI = 100
 

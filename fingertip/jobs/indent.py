@@ -56,7 +56,9 @@ def run_indent(model_dir, out_dir, scene: Scene, progress=True, scheduler=None) 
     with staged_output(out_dir) as tmp:
         tables = write_run(tmp, model_dir, run, run.afferents)
         if scene.output.plots:
-            from fem import plots    # matplotlib: 0.4 s of import, which a run without figures does without
+            from fem import (
+                plots,  # matplotlib: 0.4 s of import, which a run without figures does without
+            )
 
             for e in run.experiments:
                 for name, fig in plots.indent_figures(e, run, tables[e.name]).items():

@@ -1,9 +1,9 @@
 """`render`: a synthetic turntable set of a known shape, with its ground truth."""
 from __future__ import annotations
 
+from fem.geometry.presets import make_shape
 from fingertip.errors import InputError
 from fingertip.staging import check_output_dir
-from fem.geometry.presets import make_shape
 from reconstruct.synthetic import render_turntable
 
 

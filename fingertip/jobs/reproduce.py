@@ -12,6 +12,10 @@ import html
 import json
 from pathlib import Path
 
+from fem.plots import finding_figure, save
+from fem.thesis import claims as thesis
+from fem.thesis.claims import NOT_RUN
+from fem.thesis.findings import REPRODUCED, Finding, Workshop
 from fingertip.errors import InputError
 from fingertip.progress import as_progress
 from fingertip.staging import atomic_write, check_output_dir, write_json
@@ -38,10 +42,6 @@ def check_out(out, quick: bool) -> Path:
 
 def run_reproduce(out, quick: bool = False, progress=True) -> str:
     """Run every claim not yet in `out`, then write the report; returns the summary text."""
-    from fem.thesis import claims as thesis
-    from fem.thesis.findings import REPRODUCED, Finding, Workshop
-    from fem.plots import finding_figure, save
-
     out = check_out(out, quick)
     progress = as_progress(progress)
     out.mkdir(parents=True, exist_ok=True)
@@ -90,8 +90,6 @@ HEAD = ("thesis", "claim", "verdict", "thesis value", "project value", "differen
 
 def markdown_report(findings, quick: bool) -> str:
     """The report as Markdown (PNG links relative to the folder)."""
-    from fem.thesis.claims import NOT_RUN
-
     md = [f"# The thesis, claim by claim ({'quick: coarse meshes' if quick else 'full run'})", "",
           "Every experiment of thesis chapters 4-7 this project can run, against what the thesis "
           "states. A finding is *reproduced* when the project's number agrees with the statement; "
@@ -123,8 +121,6 @@ def _table(rows: list[dict]) -> tuple[list[str], list[list[str]]]:
 
 def html_report(findings, quick: bool) -> str:
     """The same report as one plain HTML page with the PNGs beside it."""
-    from fem.thesis.claims import NOT_RUN
-
     e = html.escape
 
     def table(head, rows):
