@@ -43,7 +43,7 @@ def cache_root() -> Path:
 
 class Silent:
     """Progress that reports nothing (the default of every science function)."""
-    def bar(self, iterable, total=None, desc="", unit="it"):
+    def bar(self, iterable, total=None, desc="", unit="it", delay=0.0):
         return iterable
 
     @contextlib.contextmanager
@@ -136,12 +136,13 @@ class Progress:
         self.history = TimingHistory() if history == "default" else history
         self._bars = []                              # open bars, innermost last
 
-    def bar(self, iterable, total=None, desc="", unit="it"):
-
+    def bar(self, iterable, total=None, desc="", unit="it", delay=0.0):
+        """Iterate with a bar (total: the count when `iterable` has no length; delay: seconds before
+        the bar shows, so a loop that ends early, or fails on its first items, prints nothing)."""
         if total is None and hasattr(iterable, "__len__"):
             total = len(iterable)
         bar = tqdm(iterable, total=total, desc=desc, unit=unit, file=self.stream, dynamic_ncols=True,
-                   leave=not self._bars, position=len(self._bars) if self._bars else None)
+                   leave=not self._bars, position=len(self._bars) if self._bars else None, delay=delay)
         self._bars.append(bar)
         try:
             yield from bar

@@ -11,9 +11,9 @@ from typing import NamedTuple
 
 import numpy as np
 from threadpoolctl import threadpool_limits
-from tqdm import tqdm
 
 from fingertip.errors import InputError
+from fingertip.progress import as_progress
 from fingertip.staging import staged_output, write_json
 from reconstruct.calibrate import Frame, estimate_axis, sample_borders, template_scale
 from reconstruct.camera import Camera, border_tables, perspective_fit, proximal_cut
@@ -124,9 +124,10 @@ def _rotate180(b: Borders, width_px: int) -> Borders:
                    b.touches_bottom, b.touches_top, b.threshold, b.background, b.object)
 
 
-def extract_all(table: Turntable, progress: bool = False) -> list[Borders]:
+def extract_all(table: Turntable, progress=None) -> list[Borders]:
     """Borders of every view (two threads: OpenCV and NumPy release the GIL; BLAS is kept to one
-    thread each, its own threads would only compete with ours)."""
+    thread each, its own threads would only compete with ours). progress: a `fingertip.progress`
+    object, True (on stderr) or None (silent)."""
     def one(path):
         b = extract_borders(table.read(path), name=path.name)
         if not np.isfinite(b.left_px).any():
@@ -136,14 +137,9 @@ def extract_all(table: Turntable, progress: bool = False) -> list[Borders]:
 
     # the bar appears only after a short delay and is closed on any error, so a refusal found in
     # the first views prints nothing but its error line
-    with ThreadPoolExecutor(max_workers=2) as pool, threadpool_limits(limits=1, user_api="blas"), \
-            tqdm(total=len(table.image_paths), desc="silhouettes", unit="view", delay=0.5,
-                 disable=not progress) as bar:
-        views = []
-        for b in pool.map(one, table.image_paths):
-            views.append(b)
-            bar.update()
-        return views
+    with ThreadPoolExecutor(max_workers=2) as pool, threadpool_limits(limits=1, user_api="blas"):
+        return list(as_progress(progress).bar(pool.map(one, table.image_paths), total=len(table.image_paths),
+                                              desc="silhouettes", unit="view", delay=0.5))
 
 
 def _trim(s: np.ndarray, width: np.ndarray, rod: bool, tip_fraction: float, ds: float,
@@ -205,7 +201,7 @@ def _checked_options(spacing_mm, tol_mm: float, tip_fraction: float) -> _Options
     return _Options(spacing_mm, tol_mm, tip_fraction)
 
 
-def _silhouettes(table: Turntable, progress: bool, timings: dict) -> tuple[Lens | None, Borders, list[Borders]]:
+def _silhouettes(table: Turntable, progress, timings: dict) -> tuple[Lens | None, Borders, list[Borders]]:
     """The lens calibrated on the checkerboard photos (None without them), the calibration
     template's borders and every view's, undistorted with the lens; each step's time (s) goes
     into timings ("lens", "silhouettes")."""
@@ -365,7 +361,7 @@ def _sections(fit: _Levels, scale, warnings: list[str]) -> tuple[np.ndarray, lis
 
 
 def reconstruct(table: Turntable, spacing_mm=(0.5, 2.0), tol_mm: float = 0.02,
-                tip_fraction: float = 0.5, progress: bool = False) -> Reconstruction:
+                tip_fraction: float = 0.5, progress=None) -> Reconstruction:
     """Run the image stage on a loaded turntable folder (nothing is written)."""
     opts = _checked_options(spacing_mm, tol_mm, tip_fraction)
     timings, warnings = {}, []
@@ -441,7 +437,7 @@ def _current(out_dir: Path, key: str) -> bool:
 
 
 def reconstruct_folder(images, out_dir, spacing_mm=(0.5, 2.0), tol_mm: float = 0.02,
-                       tip_fraction: float = 0.5, progress: bool = False, force: bool = False):
+                       tip_fraction: float = 0.5, progress=None, force: bool = False):
     """Reconstruct a turntable folder and write sections.json, surface.stl, report.png to out_dir.
 
     Returns the Reconstruction, or None when out_dir already holds outputs of the same inputs and

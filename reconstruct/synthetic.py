@@ -26,9 +26,9 @@ from pathlib import Path
 
 import cv2
 import numpy as np
-from tqdm import tqdm
 
 from fingertip.errors import InputError
+from fingertip.progress import as_progress
 from fingertip.staging import staged_output, write_json
 from reconstruct.lens import Lens
 
@@ -270,7 +270,7 @@ def render_turntable(shape, out_dir, n_views: int = 100, span_deg: float = 360.0
                      size_px=(700, 900), mm_per_px: float = 0.04, aspect: float = 1.0,
                      blur_px: float = 0.8, noise: float = 2.0, vignetting: float = 0.25,
                      axis_offset_px: float = 0.0, tilt_deg: float = 0.0, seed: int = 0,
-                     template_diameter_mm: float = 12.7, progress: bool = False,
+                     template_diameter_mm: float = 12.7, progress=None,
                      image_format: str = "png", camera_distance_mm: float | None = None,
                      write_camera: bool = False, distortion: tuple[float, ...] | None = None,
                      checkerboard: int = 0, checkerboard_inner_corners: tuple[int, int] = (9, 6),
@@ -304,7 +304,7 @@ def render_turntable(shape, out_dir, n_views: int = 100, span_deg: float = 360.0
                             thetas)
 
     with staged_output(out_dir) as tmp:
-        for i in tqdm(range(n_views), desc="render", unit="view", disable=not progress):
+        for i in as_progress(progress).bar(range(n_views), desc="render", unit="view"):
             a, b = borders(i)
             cov = _interval_image(a, b, s_grid, cam.u, cam.s, cam.sx, cam.sy)
             name = f"view_{i:03d}_{thetas[i]:07.3f}deg.{image_format}"

@@ -31,13 +31,13 @@ from scipy.optimize import least_squares
 
 from fem.contact.indentors import CYLINDERS_MM, make_indentor
 from fem.contact.linear import ContactModel
+from fem.geometry.layered import N_LAYERS
 from fem.core.materials import FLUID_LAYER, Material
 from fem.io.modelfolder import CONTACT_REGION, factorise, read_model
 from fem.verify.closed_forms import beam_deflection, waterbed_deflection
 from fingertip.errors import InputError
 from fingertip.progress import as_progress
 
-N_LAYERS = 5
 
 
 # --------------------------------------------------------------------------- codes and moduli

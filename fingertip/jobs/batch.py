@@ -14,7 +14,6 @@ one subject; it reads and writes only its own folder under DIR, which workers mu
 from __future__ import annotations
 
 import math
-import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -31,6 +30,7 @@ from fingertip.jobs.indent import run_indent
 from fingertip.jobs.mesh import check_mesh, mesh_folder
 from fingertip.jobs.reconstruct import run_reconstruct
 from fingertip.jobs.tasks import task_threads
+from fingertip.progress import as_progress
 from fingertip.staging import check_output_dir, staged_output
 from fingertip.tables import write_csv
 from reconstruct.turntable import load_turntable
@@ -200,26 +200,25 @@ def cohort_curves(results: list[dict]) -> dict:
 
 
 def run_batch(subjects: list[Subject], scene_path, out_dir, mesh: MeshOptions = MeshOptions(),
-              scheduler: str | None = None, force: bool = False, progress: bool = True) -> str:
+              scheduler: str | None = None, force: bool = False, progress=True) -> str:
     """`pipeline.py batch`: every subject through the scene, then out_dir/summary.csv and
-    cohort.png; returns the summary text. Checks everything first (`check_batch`)."""
+    cohort.png; returns the summary text. Checks everything first (`check_batch`). progress:
+    True (on stderr), False, or a progress object: a line per subject as it ends."""
     from fem import plots  # matplotlib: 0.4 s of import, not needed by the tasks
 
     _, sched = check_batch(subjects, scene_path, out_dir, mesh, scheduler)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     calls = [(s, str(out), str(scene_path), mesh, force) for s in subjects]
+    progress = as_progress(progress)
 
     def done(i, result):
-        if progress:
-            text = (f"failed: {result}" if isinstance(result, TaskFailed) else
-                    f"failed: {result['error']}" if result["error"] else f"done in {result['seconds']:.1f} s")
-            print(f"batch: {subjects[i].name}: {text}", file=sys.stderr, flush=True)
+        text = (f"failed: {result}" if isinstance(result, TaskFailed) else
+                f"failed: {result['error']}" if result["error"] else f"done in {result['seconds']:.1f} s")
+        progress.note(f"batch: {subjects[i].name}: {text}")
 
     with TaskRunner(sched) as runner:
-        if progress:
-            print(f"batch: {len(subjects)} subject(s) on scheduler {sched} ({runner.workers} worker(s))",
-                  file=sys.stderr, flush=True)
+        progress.note(f"batch: {len(subjects)} subject(s) on scheduler {sched} ({runner.workers} worker(s))")
         results = runner.map(run_subject, calls, done=done)
         stats = runner.stats
     results = [{"subject": s.name, "rows": [], "error": f"task failed: {r}", "seconds": math.nan}
