@@ -3,7 +3,7 @@
 change what the afferents get. The shipped ramp-and-hold (scenes/ramp_hold.toml: a 2 mm probe to
 1 mm in 0.1 s, held 0.5 s, released in 0.1 s) on the 1 mm human preset with the scene's material,
 and on TouchSim's half-space (E = 0.05 MPa, nu = 0.4: Sneddon's flat punch, stress and surface
-deflection in closed form; tests/test_sneddon.py checks the solver against it). Both carry 0.119 N
+deflection in closed form; tests/fem/verify/test_sneddon.py checks the solver against it). Both carry 0.119 N
 in the hold. Afferents on the line across the pad through the point the probe touches first:
 an SA1 (0.3 mm deep) and an RA (1.6 mm) below every pad node within 0.3 mm of it, model 0 of each
 class, noise off.

@@ -28,9 +28,12 @@ sys.path.insert(0, str(HERE.parent))
 
 from matplotlib.figure import Figure  # noqa: E402
 
-import pipeline  # noqa: E402
 from fem.contact.indentors import make_indentor  # noqa: E402
-from fem.io.runfolder import IndentRun  # noqa: E402
+from fem.experiments.response import ResponseStore  # noqa: E402
+from fem.experiments.runner import run_scene  # noqa: E402
+from fem.experiments.scene import load_scene  # noqa: E402
+from fem.geometry.build import MeshSpec, build_folder  # noqa: E402
+from fem.io.runfolder import IndentRun, write_run  # noqa: E402
 from fem.plots import save  # noqa: E402
 from fem.receptors.dynamics import LumpedReceptor, measure_time_course, ramp_and_hold  # noqa: E402
 from fem.receptors.probes import (  # noqa: E402
@@ -41,6 +44,7 @@ from fem.receptors.probes import (  # noqa: E402
     settling_separation,
     two_point_curves,
 )
+from fingertip.staging import staged_output  # noqa: E402
 
 RESULTS = HERE / "results"
 
@@ -134,13 +138,16 @@ def _gaps(probe) -> list[str]:
 
 def _profiles(model: Path) -> list[str]:
     """4. Spatial response profiles of central and off-centre receptors against the population
-    response (grating 0.5 mm, indented by `pipeline.py indent` if not yet): markdown lines; writes
-    analysis_bench_profiles.png and analysis_bench_population.png."""
+    response (grating 0.5 mm, examples/analysis_gratings.toml run on the model if not yet, as
+    `pipeline.py indent` runs it): markdown lines; writes analysis_bench_profiles.png and
+    analysis_bench_population.png."""
     t0 = time.perf_counter()
     runs_dir = model / "gratings"
     if not (runs_dir / "grating_0.5_receptors.csv").is_file():
-        assert pipeline.main(["indent", str(model), "--scene", str(HERE.parent / "examples" / "analysis_gratings.toml"),
-                              "--out", str(runs_dir), "--quiet"]) == 0
+        run = run_scene(model, load_scene(HERE.parent / "examples" / "analysis_gratings.toml"),
+                        store=ResponseStore.existing(model))
+        with staged_output(runs_dir) as tmp:
+            write_run(tmp, model, run, run.afferents)
     run = IndentRun(runs_dir)
     fig, ax = _subplots(3, 1, figsize=(8, 7), sharex=True)
     x_sites = run.population("grating_0.5", "sed_MPa", 0.75, 0.0)[0]
@@ -206,7 +213,7 @@ def main(argv=None):
     work = Path(args.work)
     model = work / "cyl8"
     if not (model / "mesh.vtu").is_file():
-        assert pipeline.main(["mesh", "--preset", "cylinder8", "--bone", "--out", str(model), "--quiet"]) == 0
+        build_folder(model, MeshSpec(preset="cylinder8", bone=True))
     md = ["# Receptor analysis benchmark (2D cylinder 8 mm with bone, m33338, nu 0.48)", ""]
     t0 = time.perf_counter()
     probe = Probe2D(model, np.round(np.arange(-3.0, 3.0001, 0.05), 3), depths_mm=(0.75,))

@@ -36,7 +36,6 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-import pipeline  # noqa: E402
 from fem.biomech.deflection import (  # noqa: E402
     DeflectionExperiment,
     Profile,
@@ -46,6 +45,7 @@ from fem.biomech.deflection import (  # noqa: E402
 from fem.biomech.fit import fit_material  # noqa: E402
 from fem.biomech.line_load import compare_line_load  # noqa: E402
 from fem.core.model import Model  # noqa: E402
+from fem.geometry.build import MeshSpec, build_folder  # noqa: E402
 
 
 def cpu():
@@ -54,15 +54,13 @@ def cpu():
 
 def mesh(folder, preset, z, size):
     if not (folder / "mesh.vtu").is_file():
-        assert pipeline.main(["mesh", "--preset", preset, "--section-z", str(z), "--size", str(size),
-                              "--out", str(folder), "--quiet"]) == 0
+        build_folder(folder, MeshSpec(preset=preset, section_z_mm=z, sizes={"size_mm": size}))
     return folder
 
 
 def mesh3d(folder):
     if not (folder / "mesh.vtu").is_file():
-        assert pipeline.main(["mesh", "--preset", "monkey", "--size", "0.6", "--coarse", "2.5",
-                              "--out", str(folder), "--quiet"]) == 0
+        build_folder(folder, MeshSpec(preset="monkey", sizes={"size_mm": 0.6, "coarse_mm": 2.5}))
     return folder
 
 

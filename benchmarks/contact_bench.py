@@ -22,6 +22,7 @@ import math
 import os
 import platform
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -31,8 +32,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from fem.contact.indentors import make_indentor  # noqa: E402
 from fem.contact.linear import MAX_DEPTH_MM, ContactModel, reach  # noqa: E402
+from fem.core.model import Model  # noqa: E402
+from fem.geometry.build import MeshSpec, build_folder  # noqa: E402
 from fem.io.modelfolder import CONTACT_REGION, factorise, read_model, receptor_surface  # noqa: E402
 from fem.receptors.grid import ReceptorSampler, receptor_grid  # noqa: E402
+from fem.verify.closed_forms import box, fine_then_growing, hertz_sphere  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results" / "contact_bench.md"
 
@@ -98,13 +102,9 @@ def _run(name, model_dir, indentor, offsets, loads, target_s, checks=5, middle_l
 
 
 def case_grating(args):
-    import tempfile
-
-    import pipeline
-
     folder = Path(args.model) if args.model else Path(tempfile.mkdtemp()) / "cyl8"
     if not (folder / "mesh.vtu").exists():
-        assert pipeline.main(["mesh", "--preset", "cylinder8", "--bone", "--out", str(folder), "--quiet"]) == 0
+        build_folder(folder, MeshSpec(preset="cylinder8", bone=True))
     offsets = np.zeros((150, 3))
     offsets[:, 0] = -28.6 + 0.2 * np.arange(150)
     ind = make_indentor("grating:0.5:0.5,0.75,1,1.5,2,3,5,5,5", orientation="parallel")
@@ -166,9 +166,6 @@ def case_dorsal(args):
 
 def case_hertz(args):
     """Rigid sphere R = 5 mm on a quarter block 40 x 40 x 40 mm (graded P2 tets), E = 1 MPa."""
-    from fem.core.model import Model
-    from fem.verify.closed_forms import box, fine_then_growing, hertz_sphere
-
     rows = []
     for nu in (0.3, 0.49):
         t = time.perf_counter()

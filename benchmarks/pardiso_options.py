@@ -5,9 +5,10 @@
     python benchmarks/pardiso_options.py MODEL_DIR --options default no-schur ooc-no-schur
     python benchmarks/pardiso_options.py MODEL_DIR --indentor C5 --orientation perpendicular --depth 0:3:0.5
 
-First the `indent` back end runs on the model folder (no stored response model) up to its
-factorisation, and the upper triangle of the saddle matrix it hands to PARDISO and the condensed
-rows (the reachable contact candidates) are saved in --work. Then every setting runs in its own
+First the scene runs on the model folder as `pipeline.py indent` runs it
+(`fem.experiments.runner.run_scene`, no stored response model) up to its factorisation, and the
+upper triangle of the saddle matrix it hands to PARDISO and the condensed rows (the reachable
+contact candidates) are saved in --work. Then every setting runs in its own
 process (so that its peak memory is its own): PARDISO analysis (phase 11) and, unless the
 setting says analysis only, factorisation (phase 22, with the Schur complement when the setting
 keeps it), with the project's iparm (`fem.core.linalg.Pardiso`) plus the setting's changes. Printed
@@ -25,7 +26,6 @@ directory of the setting's process (--work) and are removed by PARDISO.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import os
 import platform
@@ -43,6 +43,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 import fem.core.linalg as linalg  # noqa: E402
+from fem.experiments.runner import run_scene  # noqa: E402
+from fem.experiments.scene import Scene  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results" / "pardiso_options.md"
 SETTINGS = {     # name -> (iparm changes, condensed rows: "schur" | "partial" | None, factorise, input order seed)
@@ -76,10 +78,8 @@ class _Captured(Exception):
 
 
 def capture(model_dir: str, work: Path, indentor: str, orientation: str, depth: str) -> None:
-    """Save the saddle matrix's upper triangle (upper.npz) and condensed rows (schur.npy) that the
-    `indent` back end factorises for this scene."""
-    from fingertip.jobs.indent import indent_folder, scene_of_flags
-
+    """Save the saddle matrix's upper triangle (upper.npz) and condensed rows (schur.npy) that a
+    first run of this scene (`run_scene`, no stored response model) factorises."""
     class Capture(linalg.Pardiso):
         def __init__(self, upper, schur=None, mkl_defaults=False):
             sp.save_npz(work / "upper.npz", sp.csr_matrix(upper))
@@ -87,13 +87,14 @@ def capture(model_dir: str, work: Path, indentor: str, orientation: str, depth: 
             raise _Captured
 
     linalg.Pardiso = Capture
-    scene = scene_of_flags(indentor, orientation=orientation, depth=depth)
-    scene = dataclasses.replace(scene, output=dataclasses.replace(scene.output, pvd=False, plots=False))
+    name = indentor.replace(":", "_").replace(",", "_")
+    scene = Scene.from_dict({"experiment": [{"name": name, "indentor": indentor, "orientation": orientation,
+                                             "depth_mm": depth}], "output": {"pvd": False, "plots": False}})
     try:
-        indent_folder(model_dir, work / "run", scene, progress=False)
+        run_scene(model_dir, scene)
     except _Captured:
         return
-    raise SystemExit("the run did not factorise (is a stored response model answering it?)")
+    raise SystemExit("the run did not factorise with PARDISO (is pypardiso installed?)")
 
 
 class _AnalysisDone(Exception):

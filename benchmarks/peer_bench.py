@@ -13,13 +13,14 @@ geometry, and an active-set loop per depth that imposes the indentor's travel on
 candidates' DOF along the approach and re-factorises K_ff with pypardiso every iteration (warm
 started from the previous depth's active set), until no candidate is in tension or penetrates.
 
-The project, each round: its first run (`pipeline.py indent` back end with no stored response
-model: assembly, factorisation with the reachable candidates condensed, receptor operators), its
-build (`pipeline.py prepare`: every candidate condensed) and its repeat run (answered by the stored
-response model), all with --no-pvd --no-plots (CSVs and run.json written, receptor measures
-computed; the peer computes forces only). The repeat run is also timed as its own command
-(`python pipeline.py indent ...`: wall time including interpreter start-up and imports; best of
-CLI_RUNS runs).
+The project, each round: its first run (`indent` below, the work of `pipeline.py indent`:
+`fem.experiments.runner.run_scene` and the run folder written, with no stored response model:
+assembly, factorisation with the reachable candidates condensed, receptor operators), its build
+(`fem.experiments.runner.prepare_responses`, as `pipeline.py prepare`: every candidate condensed)
+and its repeat run (answered by the stored response model), all with no PVD and no plots (CSVs and
+run.json written, receptor measures computed; the peer computes forces only). The repeat run is
+also timed as its own command (`python pipeline.py indent ...`: wall time including interpreter
+start-up and imports; best of CLI_RUNS runs).
 
 Timed: reading the mesh onward; meshing is not counted (cached). Memory: the process's resident
 set before each phase and its peak during it (VmHWM after resetting it through
@@ -33,9 +34,9 @@ from __future__ import annotations
 
 import argparse
 import csv
-import dataclasses
 import os
 import platform
+import resource
 import shutil
 import subprocess
 import sys
@@ -43,24 +44,30 @@ import time
 from pathlib import Path
 
 import numpy as np
+import pypardiso
+from skfem import Basis, BilinearForm, asm
+from skfem.helpers import ddot, div, sym_grad
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-import pipeline  # noqa: E402
 from fem.contact.indentors import make_indentor  # noqa: E402
-from fem.experiments.runner import placement  # noqa: E402
+from fem.core.linalg import _thread_controller  # noqa: E402
+from fem.experiments.response import ResponseStore  # noqa: E402
+from fem.experiments.runner import placement, prepare_responses, run_scene  # noqa: E402
+from fem.experiments.scene import Scene  # noqa: E402
+from fem.geometry.build import MeshSpec, build_folder  # noqa: E402
 from fem.io.modelfolder import CONTACT_REGION, held_regions, read_model  # noqa: E402
-from fingertip.jobs.indent import indent_folder, scene_of_flags  # noqa: E402
-from fingertip.jobs.prepare import prepare_folder  # noqa: E402
+from fem.io.runfolder import write_run  # noqa: E402
+from fingertip.staging import staged_output  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results" / "peer_bench.md"
 CLI_RUNS = 3
 """Runs of the whole repeat command per round (the best is kept: a single start-up of the
 interpreter varies by 0.1-0.3 s on the shared machine)."""
-CASES = {"2d": {"preset": "cylinder8", "mesh_args": ["--bone"], "indentor": "C5", "orientation": "parallel",
+CASES = {"2d": {"preset": "cylinder8", "bone": True, "indentor": "C5", "orientation": "parallel",
                     "depth": "0.25:1:0.25"},
-         "3d": {"preset": "monkey", "mesh_args": [], "indentor": "C5", "orientation": "perpendicular",
+         "3d": {"preset": "monkey", "bone": False, "indentor": "C5", "orientation": "perpendicular",
                     "depth": "0.5:1.5:0.5"}}
 
 
@@ -69,10 +76,6 @@ def peer_indent(model_dir, scene, max_iterations: int = 50) -> dict:
     """Forces (N; N/mm in 2D) at the scene's depths by the plain peer (module docstring) for the
     first experiment of `scene` (a depth-controlled one along a coordinate axis). Returns
     {"force_N": [...], "factorisations": int, "iterations": [...] per depth, "active": [...]}."""
-    import pypardiso
-    from skfem import Basis, BilinearForm, asm
-    from skfem.helpers import ddot, div, sym_grad
-
     model, info = read_model(model_dir, scene.material, scene.nu)       # meshio + the same regions
     dim = model.dim
     basis = Basis(model.mesh, model.element, intorder=2)                # skfem's vector P2 basis
@@ -142,8 +145,6 @@ def _status_mb(key: str) -> float:
                 return int(line.split()[1]) / 1024
     except OSError:
         pass
-    import resource
-
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
@@ -170,14 +171,17 @@ def _command(command, report: Path):
 
 
 def _warm_up() -> None:
-    """Once-per-process costs out of the timings of whoever runs first: the imports both sides
-    use (scikit-fem, pypardiso with its library search) and the BLAS thread scan."""
-    import pypardiso  # noqa: F401
-    import skfem  # noqa: F401
-
-    from fem.core.linalg import _thread_controller
-
+    """Once-per-process costs out of the timings of whoever runs first: the BLAS thread scan (the
+    imports both sides use, scikit-fem and pypardiso with its library search, are at the top)."""
     _thread_controller()
+
+
+def indent(model_dir, out_dir, scene) -> None:
+    """What the `indent` command does but its summary: the scene on the model folder (answered by
+    its stored response model when it keeps one, else factorised) written as a run folder."""
+    run = run_scene(model_dir, scene, store=ResponseStore.existing(model_dir))
+    with staged_output(out_dir) as tmp:
+        write_run(tmp, model_dir, run, run.afferents)
 
 
 def _forces(run_dir, name) -> list[float]:
@@ -191,13 +195,12 @@ def run_case(case: str, work: Path, size: float, rounds: int) -> list[str]:
     name = f"{spec['preset']}{'_' + str(size) if case == '3d' else ''}"
     model_dir = work / name
     if not (model_dir / "mesh.vtu").is_file():
-        args = ["mesh", "--preset", spec["preset"], *spec["mesh_args"], "--out", str(model_dir), "--quiet"]
-        if case == "3d":
-            args += ["--size", str(size)]
-        assert pipeline.main(args) == 0
-    scene = scene_of_flags(spec["indentor"], orientation=spec["orientation"], depth=spec["depth"])
-    scene = dataclasses.replace(scene, output=dataclasses.replace(scene.output, pvd=False, plots=False))
-    exp = scene.experiments[0].name
+        build_folder(model_dir, MeshSpec(preset=spec["preset"], bone=spec["bone"],
+                                         sizes={"size_mm": size} if case == "3d" else {}))
+    exp = spec["indentor"]
+    scene = Scene.from_dict({"experiment": [{"name": exp, "indentor": spec["indentor"],
+                                             "orientation": spec["orientation"], "depth_mm": spec["depth"]}],
+                             "output": {"pvd": False, "plots": False}})
     command = [sys.executable, str(ROOT / "pipeline.py"), "indent", str(model_dir), "--indentor", spec["indentor"],
                "--orientation", spec["orientation"], "--depth", spec["depth"], "--no-pvd", "--no-plots",
                "--quiet", "--out", str(work / "run_cli")]
@@ -207,12 +210,12 @@ def run_case(case: str, work: Path, size: float, rounds: int) -> list[str]:
         shutil.rmtree(model_dir / "response", ignore_errors=True)
         for folder in ("run_first", "run_repeat", "run_cli"):
             shutil.rmtree(work / folder, ignore_errors=True)
-        _, t, mb = _timed(lambda: indent_folder(model_dir, work / "run_first", scene, progress=False))
+        _, t, mb = _timed(lambda: indent(model_dir, work / "run_first", scene))
         rows["first"].append((t, mb))
         first = _forces(work / "run_first", exp)
-        _, t, mb = _timed(lambda: prepare_folder(model_dir, progress=False))
+        _, t, mb = _timed(lambda: prepare_responses(model_dir))
         rows["build"].append((t, mb))
-        _, t, mb = _timed(lambda: indent_folder(model_dir, work / "run_repeat", scene, progress=False))
+        _, t, mb = _timed(lambda: indent(model_dir, work / "run_repeat", scene))
         rows["repeat"].append((t, mb))
         repeat = _forces(work / "run_repeat", exp)
         rows["repeat_cli"].append(min(_command(command, work / "time.txt") for _ in range(CLI_RUNS)))
@@ -225,8 +228,7 @@ def run_case(case: str, work: Path, size: float, rounds: int) -> list[str]:
     peer_t = best["peer"][0]
     diff = max(abs(p / f - 1) for p, f in zip(peer["force_N"], first))
     same = max(abs(b / f - 1) for b, f in zip(repeat, first))
-    from fem.io.modelfolder import read_model as _rm
-    model, _ = _rm(model_dir)
+    model, _ = read_model(model_dir)
     unit = "N/mm" if model.dim == 2 else "N"
     lines = [f"### {case.upper()}: {name} ({model.ndof} DOFs), {spec['indentor']} {spec['orientation']}, "
              f"depths {spec['depth']} mm", "",

@@ -3,7 +3,7 @@
 TouchSim's skin) on fem.verify.halfspace.flat_block_model, against Sneddon's (1946) closed form, run time
 next to error, for a coarse and a finer mesh.
 
-    python benchmarks/sneddon_check.py                  # coarse (tests/test_sneddon.py) and finer mesh:
+    python benchmarks/sneddon_check.py                  # coarse (tests/fem/verify/test_sneddon.py) and finer mesh:
                                                         # 60 s, 7.2 GB peak on 2 cores
     python benchmarks/sneddon_check.py --study          # + block sizes, side conditions (about 1 min more)
     python benchmarks/sneddon_check.py --tensor         # + the tensor-grid mesh (90 s, 18 GB peak)

@@ -3,9 +3,8 @@ and its results read, with no global state changed (matplotlib backend, environm
 import json
 import subprocess
 import sys
-from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+from tests.helpers import ROOT
 
 SCRIPT = r"""
 import json, os, sys

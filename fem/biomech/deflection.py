@@ -33,7 +33,7 @@ from fem.contact.indentors import CYLINDERS_MM, make_indentor
 from fem.contact.linear import ContactModel
 from fem.geometry.layered import N_LAYERS
 from fem.core.materials import FLUID_LAYER, Material
-from fem.io.modelfolder import CONTACT_REGION, factorise, read_model
+from fem.io.modelfolder import CONTACT_REGION, factorise, folder_material, read_model
 from fem.verify.closed_forms import beam_deflection, waterbed_deflection
 from fingertip.errors import InputError
 from fingertip.progress import as_progress
@@ -223,7 +223,7 @@ class DeflectionExperiment:
 
     def _factorise(self, log10_Pa):
         """A new fem.contact.linear.ContactModel of the model with these log10 moduli [Pa] (one factorisation)."""
-        nu = self.info.get("nu", 0.48) if self.nu is None else self.nu
+        nu = folder_material(self.info)[1] if self.nu is None else self.nu
         model = self._model.with_material(Material(moduli_MPa(log10_Pa), nu=nu, rigid_bone=self.rigid_bone))
         system = factorise(model, self.info, progress=self.progress)
         self._model = model

@@ -32,7 +32,7 @@ indentation together, 64 right-hand sides per solve.
 
 P2 meshes: every trace node (vertices and edge midpoints) is a contact node with the solver's
 tributary areas. Node-to-surface constraints on P2 give accurate force, contact size and
-deflection (Hertz within 3 %, tests/test_contact_fe.py) but nodal forces alternate between vertex
+deflection (Hertz within 3 %, tests/fem/contact/test_contact_fe.py) but nodal forces alternate between vertex
 and midside nodes (about 1 : 2 against a consistent load), so raw f_i / A_i overstates the peak
 pressure by about a third: hence the facet-averaged pressure.
 

@@ -20,7 +20,10 @@ import numpy as np
 from fingertip.errors import InputError
 
 DEFAULT_CODE = "m33338"
-"""The material of a model whose model.json names none: 10 kPa in every soft layer, 100 MPa bone."""
+"""The material of a model whose model.json names none, and of the homogeneous 2D models: 1 kPa
+in every soft layer, 100 MPa bone."""
+LAYERED_CODE = "m43338"
+"""The material a five-layer model folder records: the thesis's fitted multi-layer model (6.2.1)."""
 DEFAULT_NU = 0.48
 """Poisson ratio of a model whose model.json names none (thesis 4.1: nearly incompressible)."""
 NU_MAX = 0.4999

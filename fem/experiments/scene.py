@@ -41,7 +41,7 @@ import numpy as np
 
 from fem.contact.indentors import orientation_deg, shapes_for
 from fem.contact.linear import MAX_DEPTH_MM
-from fem.core.materials import Material
+from fem.core.materials import DEFAULT_CODE, DEFAULT_NU, Material
 from fem.core.measures import check_names
 from fem.experiments.traces import check, fractions
 from fem.receptors.grid import DEFAULT_DEPTHS_MM, DEFAULT_MEASURES
@@ -459,7 +459,7 @@ class Scene:
         if not isinstance(tables, list):
             raise InputError("scene experiment: expected [[experiment]] tables")
         if "material" in kw or "nu" in kw:
-            Material(kw.get("material", "m33338"), kw.get("nu", 0.48))      # the code's form and nu's range
+            Material(kw.get("material", DEFAULT_CODE), kw.get("nu", DEFAULT_NU))      # the code's form and nu's range
         experiments = tuple(Experiment.from_dict(t, k) for k, t in enumerate(tables))
         if kw.get("afferents") is not None and not any(e.trace is not None for e in experiments):
             raise InputError(f"{source}: [afferents] spike over time; give an experiment a time course "

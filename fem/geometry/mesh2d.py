@@ -21,7 +21,7 @@ import numpy as np
 from matplotlib.path import Path as MplPath
 from scipy.spatial import Delaunay, cKDTree
 
-from fem.core.materials import FLUID_LAYER
+from fem.core.materials import DEFAULT_CODE, DEFAULT_NU, FLUID_LAYER, LAYERED_CODE
 from fem.geometry.mesh3d import check_sizes
 from fingertip.declare import declared, positive
 from fingertip.errors import InputError
@@ -359,7 +359,8 @@ def run_mesh2d(out_dir, domain: Domain2D, sizing: Sizing2D, progress=None):
                     point_data=flags)
     data = {"kind": "2d plane strain", "units": "mm", "points": "(x, y, 0)", "domain": domain.name,
             "params": domain.params, "layers": domain.layers, "sizing": asdict(sizing),
-            "material": "m43338" if len(domain.layers) == 5 else "m33338", "nu": 0.48, "mesh": rep}
+            "material": LAYERED_CODE if len(domain.layers) == 5 else DEFAULT_CODE, "nu": DEFAULT_NU,
+            "mesh": rep}
     with staged_output(out_dir) as tmp:
         meshio.write(tmp / "mesh.vtu", m)
         write_json(tmp / "model.json", data)

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fem.core.materials import DEFAULT_CODE, DEFAULT_NU
 from fem.core.model import Model
 from fingertip.errors import InputError
 from fingertip.progress import as_progress
@@ -38,8 +39,8 @@ def read_model(model_dir, material=None, nu=None):
     the skin layers (SKIN_LAYERS), which HELD fixes."""
     folder = Path(model_dir)
     info = folder_info(folder)
-    model = Model.from_mesh(folder / "mesh.vtu", material=material or info.get("material", "m33338"),
-                            nu=info.get("nu", 0.48) if nu is None else nu)
+    own_material, own_nu = folder_material(info)
+    model = Model.from_mesh(folder / "mesh.vtu", material=material or own_material, nu=own_nu if nu is None else nu)
     if "proximal" in model.regions and "proximal_core" not in model.regions:
         skin = np.zeros(model.mesh.nvertices, bool)
         skin[model.mesh.t[:, np.isin(model.layer, SKIN_LAYERS)].ravel()] = True
@@ -66,6 +67,12 @@ def folder_info(model_dir) -> dict:
         raise InputError(f"{folder / 'model.json'} is not a model folder's model.json"
                          + (f" (wrong type of {', '.join(wrong)})" if wrong else "") + "; re-run `pipeline.py mesh`")
     return info
+
+
+def folder_material(info: dict) -> tuple[str, float]:
+    """(material code, nu) a model folder's model.json records (`folder_info`; the defaults of
+    fem.core.materials when it names none)."""
+    return info.get("material", DEFAULT_CODE), info.get("nu", DEFAULT_NU)
 
 
 def folder_dim(info: dict) -> int:

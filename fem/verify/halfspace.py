@@ -3,7 +3,7 @@
 Units mm, N, MPa; the project's axes: the top face y = 0 is the contact surface, the body is
 y < 0, the punch (radius a, on the y axis) approaches along -y. The block checks the 3D contact
 solver against `fem.verify.closed_forms.sneddon_punch_force_N` and `sneddon_punch_stress_zz_MPa` at the
-depths where TouchSim places its afferents (tests/test_sneddon.py, benchmarks/sneddon_check.py).
+depths where TouchSim places its afferents (tests/fem/verify/test_sneddon.py, benchmarks/sneddon_check.py).
 
     block = flat_block_model()                                        # quarter block, factorised
     points = [[0.0, -0.3, 0.0], [0.5, -1.6, 0.0]]                     # (x, y, z) mm, z = 0 plane

@@ -1,4 +1,4 @@
-"""Back end of `pipeline.py analyze`: read the indentation runs and the recorded rates, rank the
+"""The `analyze` job: read the indentation runs and the recorded rates, rank the
 candidate measures per unit (fem.receptors.analysis), write the tables (CSV and Markdown; floats `.6g`, NaN
 as an empty cell), the profile and scatter figures and analysis.json atomically, and return the
 summary text."""

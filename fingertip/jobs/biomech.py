@@ -24,7 +24,7 @@ from fem.biomech.fit import fit_force_scale, fit_material, profile_residuals
 from fem.biomech.line_load import compare_line_load
 from fem.biomech.measured import read_deflection_csv, read_force_csv
 from fem.contact.indentors import orientation_deg, shapes_for
-from fem.io.modelfolder import folder_info
+from fem.io.modelfolder import folder_info, folder_material
 from fingertip.distribute import parse_scheduler, require_dask
 from fingertip.errors import InputError
 from fingertip.jobs.tasks import task_map
@@ -75,7 +75,7 @@ def run_study_layers(model_dir, out_dir, base=None, layers=(1, 2, 3, 4), offsets
     data = read_deflection_csv(data_csv) if data_csv else []
     with task_map(sched, "trial material", as_progress(progress)) as map_:
         exp = _experiment(model_dir, indentor, orientation, position_mm, nu, side, progress, map_)
-        base = base or exp.info.get("material", "m43338")
+        base = base or folder_material(exp.info)[0]
         study = layer_study(exp, base, layer_list, offset_list, depth_list)
         base_prof = exp.profiles(base, depth_list)
         fits = [idealised_fits(p) for p in base_prof]
@@ -125,7 +125,7 @@ def run_fit_material(model_dir, out_dir, deflection_csv=None, force_csv=None, ke
     forces = read_force_csv(force_csv) if force_csv else None
     with task_map(sched, "trial material", as_progress(progress)) as map_:
         exp = _experiment(model_dir, indentor, orientation, position_mm, nu, side, progress, map_)
-        base = base or exp.info.get("material", "m43338")
+        base = base or folder_material(exp.info)[0]
         base_v = parse_code(base, exp.n_layers)
         report, fit, scale = {"model": str(model_dir), "base": base}, None, None
         if data is not None:
@@ -181,7 +181,7 @@ def run_contact_series(model_dir, out_dir, material=None, codes=None, forces=Non
     _check_start(out_dir, orientation=orientation)
     loads = list(forces if forces is not None else depths)
     exp = _experiment(model_dir, "wedge", orientation, position_mm, nu, "mean", progress)
-    material = material or exp.info.get("material", "m43338")
+    material = material or folder_material(exp.info)[0]
     s = cylinder_series(exp, material, codes, **({"forces_N": loads} if forces is not None else {"depths_mm": loads}))
     force_unit = "N/mm" if exp.dim == 2 else "N"
     area = "contact width, mm" if exp.dim == 2 else "contact area, mm^2"
@@ -215,7 +215,7 @@ def run_line_load(model_dir, out_dir, depths=(0.05, 0.5, 1.0, 2.0), material=Non
     _check_start(out_dir)
     depth_list = list(depths)
     info = folder_info(model_dir)
-    material = material or info.get("material", "m43338")
+    material = material or folder_material(info)[0]
     parse_code(material)
     c = compare_line_load(model_dir, depth_list, material=material, nu=nu, half_width_mm=half_width_mm,
                           step_mm=step_mm, position_mm=position_mm, slip=slip, half_length_mm=half_length_mm,

@@ -1,4 +1,4 @@
-"""`render`: a synthetic turntable set of a known shape, with its ground truth."""
+"""The `render` job: a synthetic turntable set of a known shape, with its ground truth."""
 from __future__ import annotations
 
 from fem.geometry.presets import make_shape

@@ -1,4 +1,4 @@
-"""Back end of `pipeline.py reproduce`: run the thesis's claims (fem.thesis.claims.CLAIMS) into a folder
+"""The `reproduce` job: run the thesis's claims (fem.thesis.claims.CLAIMS) into a folder
 and write index.html and index.md there, one section per thesis figure or table.
 
 Each claim's findings are kept as claims/<name>.json with their PNGs; a rerun into the same folder

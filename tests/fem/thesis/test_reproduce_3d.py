@@ -1,21 +1,18 @@
 """Thesis chapters 6-7 claims on the 3D monkey preset (1 mm elements, fem.thesis.chapters5_7): the bar in
 3D (figures 6-25, 7-4), the 2D section against 3D (figures 7-2, 7-3) and step 5 across the pad
 (figure 6-39). The cylinder series and layer study behind the other 3D claims are pinned on 2D
-models in tests/test_biomech.py; dorsal ratios in tests/test_dorsal_trend.py."""
+models in tests/fem/biomech/test_biomech.py; dorsal ratios in tests/fem/thesis/test_dorsal_trend.py."""
 import pytest
 
 from fem.thesis import chapters5_7 as thesis3d
 from fem.thesis.findings import DIFFERS, REPRODUCED
-
-
-def _by_key(findings):
-    return {f.key: f for f in findings}
+from tests.helpers import by_key
 
 
 def test_bar_in_3d_bends_the_stiff_epidermis_and_stays_local(shop):
     """Measured: SED 1.0 / 0.75 mm deep 1.17 (m43338), 0.97 (m33338); 86 % and 84 % of the section
     below 10 % of the peak SED (thesis 85 %); deflection 1 mm beside the bar 1.40x with m43338."""
-    f = _by_key(thesis3d.bars_3d(shop))
+    f = by_key(thesis3d.bars_3d(shop))
     depth, local, gradual = f["fig6-25_bar_depth"], f["fig7-4_local"], f["sec7-1-2_gradual"]
     assert depth.verdict == REPRODUCED and depth.value == pytest.approx(1.17, abs=0.05)
     rows = {r["material"]: r for r in depth.table}
@@ -31,7 +28,7 @@ def test_2d_section_against_3d(shop):
     0.998; 2D / 3D peak SED 0.79 against the thesis's > 1 (0.5 mm elements: 1.26 and 0.78 at equal
     line loads, the plane-strain factor 1 / (1 - nu^2) = 1.30 within 4 %); the section 2 mm off is
     less strained (SED 0.99x)."""
-    f = _by_key(thesis3d.sections_2d_3d(shop))
+    f = by_key(thesis3d.sections_2d_3d(shop))
     eps, sed, off = f["fig7-2_eps1"], f["fig7-2_sed"], f["fig7-3_off_centre"]
     assert eps.value == pytest.approx(1.25, abs=0.06) and eps.verdict == DIFFERS
     assert "correlation of the two profiles 0.99" in eps.reason and "1 / 1.30 at nu = 0.48" in eps.reason
@@ -45,7 +42,7 @@ def test_step_across_the_pad(shop):
     rank correlation -0.69, not the thesis's 'always' inverse. Receptors 0.75 mm deep at x = -1.5,
     0, +1.5 mm: peak SED 15.2, 30.4, 9.3 Pa; their peak-normalised spatial response profiles,
     aligned on the receptor, differ by up to 67 % of the peak (0 on a flat half-space)."""
-    f = _by_key(thesis3d.steps_3d(shop))
+    f = by_key(thesis3d.steps_3d(shop))
     ext, inv = f["fig6-39_step_extremes"], f["fig6-39_step_inverse"]
     assert ext.verdict == REPRODUCED
     areas = [r["contact_area_mm2"] for r in ext.table]

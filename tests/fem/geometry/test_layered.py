@@ -1,12 +1,11 @@
 """Layered model geometry (no meshing): layer thicknesses, scaling, bone, analytic volumes, errors."""
-import json
-
 import numpy as np
 import pytest
 
 import pipeline
 from fem.geometry.layered import ModelParams, build_model, model_from_args, params_for
 from fingertip.errors import InputError
+from tests.helpers import write_sections
 
 
 def circle(r, n=360, c=(0.0, 0.0)):
@@ -32,7 +31,8 @@ def test_cylinder_layer_volumes_match_closed_form():
 
 
 def test_skin_thickness_is_constant_all_round_on_the_human_preset():
-    from fem.geometry.layered import _min_gap, check_polygon, preset_sections
+    from fem.geometry.layered import _min_gap
+    from fem.geometry.sections import check_polygon, preset_sections
 
     z, polys, _ = preset_sections("human")
     m = build_model(z, polys, params_for("human"))
@@ -170,14 +170,6 @@ def test_rounded_tip_too_short_for_the_layers_is_refused(tmp_path, capsys):
 
 
 # ------------------------------------------------------------------ bad input: exit 2, nothing written
-def write_sections(folder, polys, zs=None):
-    folder.mkdir(parents=True, exist_ok=True)
-    zs = zs if zs is not None else np.arange(len(polys), dtype=float)
-    data = {"units": "mm", "sections": [{"z": float(z), "points": np.asarray(p).tolist()} for z, p in zip(zs, polys)]}
-    (folder / "sections.json").write_text(json.dumps(data))
-    return folder
-
-
 def run_bad(args, out, capsys):
     assert pipeline.main(["mesh", *args, "--out", str(out), "--quiet"]) == 2
     err = capsys.readouterr().err.strip()
@@ -259,19 +251,15 @@ def test_inclined_support_is_recorded_with_the_vertical_direction():
 # ------------------------------------------------------------------ layer-3 and bone-offset defaults by size
 def preset_replica(tmp_path, preset, scale=1.0):
     """sections.json of a preset's sections scaled in x and y by `scale` (a replica of that size)."""
-    from fem.geometry.layered import preset_sections
+    from fem.geometry.sections import preset_sections
 
     z, polys, _ = preset_sections(preset)
     return write_sections(tmp_path / f"{preset}_{scale:g}", [scale * p for p in polys], z)
 
 
 def test_preset_middle_widths_and_size_rule_reproduce_the_presets():
-    from fem.geometry.layered import (
-        PRESET_MIDDLE_WIDTH_MM,
-        PRESET_PARAMS,
-        preset_sections,
-        size_defaults,
-    )
+    from fem.geometry.layered import PRESET_MIDDLE_WIDTH_MM, PRESET_PARAMS, size_defaults
+    from fem.geometry.sections import preset_sections
 
     for preset, width in PRESET_MIDDLE_WIDTH_MM.items():
         z, polys, _ = preset_sections(preset)

@@ -17,6 +17,7 @@ from fem.geometry.mesh3d import (
     tet_volumes,
 )
 from fingertip.errors import InputError
+from tests.helpers import ROOT, write_sections
 
 ARGS = ["mesh", "--preset", "monkey", "--size", "0.8", "--quiet"]
 
@@ -187,13 +188,10 @@ def test_rerun_skips_current_outputs_and_region_changes_reuse_the_tets(built, tm
 def test_monkey_size_sections_json_meshes_with_size_defaults(built, tmp_path, monkeypatch, capsys):
     """A monkey-size replica needs no --layer3/--bone-offset: the defaults follow the section size,
     are printed and recorded in model.json; an explicit flag still wins."""
-    from fem.geometry.layered import preset_sections
+    from fem.geometry.sections import preset_sections
 
     z, polys, _ = preset_sections("monkey")
-    src = tmp_path / "replica"
-    src.mkdir()
-    (src / "sections.json").write_text(json.dumps(
-        {"units": "mm", "sections": [{"z": float(zi), "points": p.tolist()} for zi, p in zip(z, polys)]}))
+    src = write_sections(tmp_path / "replica", polys, z)
     monkeypatch.setenv("FINGERTIP_CACHE_DIR", str(built[1]))
     out = tmp_path / "m"
     assert pipeline.main(["mesh", str(src), "--size", "0.8", "--out", str(out)]) == 0
@@ -249,12 +247,11 @@ def test_3d_scenes_run_on_the_preset(built, tmp_path, scene):
     """Every shipped 3D scene runs on the monkey preset (until the proximal cut's skin was freed,
     bars, cylinders, line_load and steps stopped at its held rim); all KKT checks pass."""
     from dataclasses import replace
-    from pathlib import Path
 
     from fem.experiments.scene import Output, load_scene
     from fingertip.jobs.indent import indent_folder
 
-    spec = replace(load_scene(Path(pipeline.__file__).parent / "scenes" / f"{scene}.toml"),
+    spec = replace(load_scene(ROOT / "scenes" / f"{scene}.toml"),
                    output=Output(plots=False, pvd=False))
     indent_folder(built[0], tmp_path / scene, spec, progress=False)
     for name in [e.name for e in spec.experiments]:

@@ -9,6 +9,7 @@ import pytest
 
 import pipeline
 from fem.geometry.mesh3d import tet_volumes
+from tests.helpers import ROOT
 
 ARGS = ["mesh", "--preset", "monkey", "--size", "0.8", "--tip", "rounded", "--support-incline", "-30", "--quiet"]
 Z1, TIP = 7.5, 3.5                     # monkey preset: body 0-7.5 mm, ellipsoidal cap 3.5 mm long
@@ -52,12 +53,11 @@ def test_every_layer_wraps_round_the_tip(built):
 def force_displacement(built, tmp_path_factory):
     """The shipped scene on the tilted rounded monkey, plus a 3 mm punch: {name: (rows, surface)}."""
     from dataclasses import replace
-    from pathlib import Path
 
     from fem.experiments.scene import Experiment, Output, load_scene
     from fingertip.jobs.indent import indent_folder
 
-    spec = load_scene(Path(pipeline.__file__).parent / "scenes" / "force_displacement.toml")
+    spec = load_scene(ROOT / "scenes" / "force_displacement.toml")
     punch = Experiment.from_dict({"name": "punch3", "indentor": "punch:3", "position_mm": "top",
                                   "depth_mm": "0.25:2:0.25"})
     spec = replace(spec, output=Output(plots=False, pvd=False), experiments=(*spec.experiments, punch))

@@ -2,8 +2,6 @@
 work (well under 2 s); a corrupt mesh cache entry is rebuilt; an interrupt ends with one line."""
 from __future__ import annotations
 
-import contextlib
-import io
 import os
 import signal
 import subprocess
@@ -15,24 +13,10 @@ import numpy as np
 import pytest
 
 import pipeline
+from tests.helpers import ROOT, cli, snapshot
 
-ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "data"
 REFUSAL_S = 2.0          # the issue's bound on a refusal: no meshing or factorising before it
-
-
-def cli(*argv) -> tuple[int, str, str, float]:
-    """pipeline.main in-process: (exit code, stdout, stderr, seconds)."""
-    out, err = io.StringIO(), io.StringIO()
-    t0 = time.perf_counter()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = pipeline.main([str(a) for a in argv])
-    return code, out.getvalue(), err.getvalue(), time.perf_counter() - t0
-
-
-def snapshot(*folders) -> set:
-    """Every path below the folders (to show that nothing was written)."""
-    return {p for f in folders if Path(f).exists() for p in Path(f).rglob("*")}
 
 
 def assert_refused(argv, watch, pattern=None):

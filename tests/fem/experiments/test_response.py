@@ -12,6 +12,7 @@ from fem.experiments.response import ResponseStore, response_key
 from fem.experiments.runner import run_experiments
 from fem.experiments.scene import Scene
 from fem.io.modelfolder import read_model
+from tests.helpers import ROOT
 
 RTOL = 1e-9
 """Stored against factorised: both solve the same linear system, once by a Schur complement of a
@@ -19,14 +20,8 @@ subset and solves, once by a stored matrix product; measured agreement is 1e-11 
 
 
 @pytest.fixture(scope="module")
-def cyl8(tmp_path_factory):
-    out = tmp_path_factory.mktemp("models") / "cyl8"
-    assert pipeline.main(["mesh", "--preset", "cylinder8", "--bone", "--out", str(out), "--quiet"]) == 0
-    return out
-
-
-@pytest.fixture(scope="module")
 def monkey(tmp_path_factory):
+    """The 3D monkey preset with 1.5 mm elements (this module's own)."""
     out = tmp_path_factory.mktemp("models") / "monkey"
     assert pipeline.main(["mesh", "--preset", "monkey", "--size", "1.5", "--out", str(out), "--quiet"]) == 0
     return out
@@ -198,7 +193,6 @@ def test_repeat_run_without_plots_imports_no_matplotlib(cyl8, tmp_path):
     fem.plots nor the factorisation's PARDISO loaded."""
     import subprocess
     import sys
-    from pathlib import Path
 
     assert pipeline.main(["prepare", str(cyl8), "--quiet"]) == 0
     out = tmp_path / "run"
@@ -206,6 +200,6 @@ def test_repeat_run_without_plots_imports_no_matplotlib(cyl8, tmp_path):
             "print(sorted(m for m in ('matplotlib', 'fem.plots', 'pypardiso') if m in sys.modules))")
     done = subprocess.run([sys.executable, "-c", code, "indent", str(cyl8), "--indentor", "C5", "--depth",
                            "0.25:1:0.25", "--no-pvd", "--no-plots", "--out", str(out), "--quiet"],
-                          capture_output=True, text=True, cwd=Path(pipeline.__file__).parent, check=True)
+                          capture_output=True, text=True, cwd=ROOT, check=True)
     assert done.stdout.strip().splitlines()[-1] == "[]", done.stdout + done.stderr
     assert not list(out.glob("*.png")) and (out / "C5_receptors.csv").is_file()

@@ -4,8 +4,6 @@ kept under indentation, much softer than the cylinder with bone, the mesh comman
 refusals; the block preset holds its sides."""
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 
 import meshio
@@ -20,6 +18,7 @@ from fem.core.materials import FLUID_LAYER
 from fem.geometry import mesh2d
 from fem.io.modelfolder import factorise, open_model, read_model
 from fingertip.errors import InputError
+from tests.helpers import cli
 
 SIZE = mesh2d.Sizing2D(size_mm=0.25)        # coarse: the whole file runs in a few seconds
 
@@ -136,13 +135,6 @@ def test_solid_fluid_is_much_softer_than_the_cylinder_with_bone(cylinders):
 
 
 # --------------------------------------------------------------------------- command line
-def _cli(*argv):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = pipeline.main([str(a) for a in argv])
-    return code, err.getvalue()
-
-
 def test_mesh_command_solid_fluid(tmp_path):
     out = tmp_path / "f"
     assert pipeline.main(["mesh", "--preset", "cylinder8", "--solid-fluid", "--size", "0.25",
@@ -162,7 +154,7 @@ def test_mesh_command_solid_fluid(tmp_path):
 ])
 def test_mesh_command_refuses_solid_fluid_misuse(tmp_path, flags, pattern):
     out = tmp_path / "f"
-    code, err = _cli("mesh", *flags, "--size", "0.25", "--out", out, "--quiet")
+    code, _, err, _ = cli("mesh", *flags, "--size", "0.25", "--out", out, "--quiet")
     lines = err.strip().splitlines()
     assert code == 2 and len(lines) == 1 and lines[0].startswith("error: "), err
     assert pattern in lines[0] and "Traceback" not in err

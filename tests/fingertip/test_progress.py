@@ -18,13 +18,6 @@ def own_cache(tmp_path, monkeypatch):
     monkeypatch.setenv("FINGERTIP_CACHE_DIR", str(tmp_path / "cache"))
 
 
-@pytest.fixture(scope="module")
-def cyl8(tmp_path_factory):
-    out = tmp_path_factory.mktemp("models") / "cyl8"
-    assert pipeline.main(["mesh", "--preset", "cylinder8", "--bone", "--out", str(out), "--quiet"]) == 0
-    return out
-
-
 def test_power_law_estimate(tmp_path):
     h = TimingHistory(tmp_path / "t.json")
     assert h.estimate("factorise-3d", 1000) is None                      # no history: no estimate

@@ -1,5 +1,5 @@
 """Thesis chapter-4 claims (fem.thesis.chapter4_mechanics) on coarse 2D models, and `pipeline.py
-reproduce`: report, resume, refusals. The dorsal-half claim (3D) is pinned by tests/test_dorsal_trend.py."""
+reproduce`: report, resume, refusals. The dorsal-half claim (3D) is pinned by tests/fem/thesis/test_dorsal_trend.py."""
 import json
 
 import numpy as np
@@ -9,10 +9,7 @@ import pipeline
 from fem.thesis import chapter4_mechanics
 from fem.thesis import claims as thesis
 from fem.thesis.findings import DIFFERS, REPRODUCED
-
-
-def _by_key(findings):
-    return {f.key: f for f in findings}
+from tests.helpers import by_key
 
 
 def test_block_with_held_sides_matches_flamant(shop):
@@ -29,7 +26,7 @@ def test_cylinders_follow_plane_strain_hertz_not_a_square_root_law(shop):
     (measured -4.7 % at F*, -4.1 % at F*/10), a log-log slope near 0.12, not 0.5; the solid-fluid
     model is deeper for every cylinder and keeps its volume (6.7e-11 of the core's area)."""
     runs = chapter4_mechanics.cylinder_runs(shop)
-    findings = _by_key(chapter4_mechanics.cylinder_findings(runs, shop.size_mm))
+    findings = by_key(chapter4_mechanics.cylinder_findings(runs, shop.size_mm))
     depth = findings["fig4-24_depth"]
     assert depth.verdict == DIFFERS and 0.05 < depth.value < 0.2
     for level in ("F*", "F*/10"):

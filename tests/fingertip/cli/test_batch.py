@@ -1,7 +1,6 @@
 """`pipeline.py batch`: a cohort of three small 2D subjects in this process and on Dask
 (`--scheduler local:2`, an existing cluster whose worker is killed mid-run), failures per subject,
 and the one-line errors (bad subjects, Dask missing) that write nothing."""
-import csv
 import operator
 import os
 import signal
@@ -14,6 +13,7 @@ import pytest
 
 import pipeline
 from fingertip.jobs.batch import MeshOptions, parse_subjects, run_batch
+from tests.helpers import csv_rows
 
 SCENE = """\
 [receptors]
@@ -53,13 +53,8 @@ def serial(tmp_path_factory, scene):
     return out
 
 
-def _rows(path):
-    with open(path, newline="") as fh:
-        return list(csv.DictReader(fh))
-
-
 def test_serial_summary_compares_the_subjects(serial):
-    rows = _rows(serial / "summary.csv")
+    rows = csv_rows(serial / "summary.csv")
     assert [r["subject"] for r in rows] == ["cylinder8"] * 5 + ["cylinder8_bone"] * 5 + ["square"] * 5
     assert all(r["error"] == "" for r in rows)
     assert {"peak_sed_MPa", "peak_max_compressive_strain", "max_pressure_MPa", "contact_area_mm2"} <= set(rows[0])
@@ -140,10 +135,10 @@ def test_a_failing_subject_is_reported_and_the_others_go_on(tmp_path, scene, ser
     out = tmp_path / "cohort"
     assert pipeline.main(["batch", "preset:square", str(bad), "--scene", str(scene), "--out", str(out),
                           *MESH, "--quiet"]) == 0
-    rows = _rows(out / "summary.csv")
+    rows = csv_rows(out / "summary.csv")
     square = [r for r in rows if r["subject"] == "square"]
     assert [r["error"] for r in square] == [""] * 5
-    assert square == [r for r in _rows(serial / "summary.csv") if r["subject"] == "square"]
+    assert square == [r for r in csv_rows(serial / "summary.csv") if r["subject"] == "square"]
     (failed,) = [r for r in rows if r["subject"] == "broken"]
     assert "sections.json" in failed["error"] and "\n" not in failed["error"]
     assert failed["force_N"] == "" and failed["experiment"] == ""

@@ -14,19 +14,16 @@ from fingertip.jobs.tasks import task_threads
 
 
 @pytest.fixture(scope="module")
-def section(tmp_path_factory):
-    """Coarse five-layer 2D cross-section of the monkey model, and measured-like profiles made
-    by the model (layer 3 at 10^3.4 Pa) at 1 and 2 mm."""
+def section_profiles(section, tmp_path_factory):
+    """The coarse five-layer 2D monkey section (this module's copy, tests/conftest.py), and
+    measured-like profiles made by the model (layer 3 at 10^3.4 Pa) at 1 and 2 mm."""
     root = tmp_path_factory.mktemp("dfits")
-    out = root / "msec"
-    assert pipeline.main(["mesh", "--preset", "monkey", "--section-z", "5", "--size", "0.25",
-                          "--out", str(out), "--quiet"]) == 0
     dist = np.arange(0.2, 3.0, 0.2)
     lines = ["distance_mm,deflection_mm,depth_mm"]
-    for p in DeflectionExperiment(out).profiles([4.0, 3.0, 3.4, 3.0, 8.0], [1.0, 2.0]):
+    for p in DeflectionExperiment(section).profiles([4.0, 3.0, 3.4, 3.0, 8.0], [1.0, 2.0]):
         lines += [f"{d:.2f},{w:.6f},{p.depth_mm:g}" for d, w in zip(dist, p.at(dist))]
     (root / "defl.csv").write_text("\n".join(lines) + "\n")
-    return out, root / "defl.csv"
+    return section, root / "defl.csv"
 
 
 def _json(path) -> dict:
@@ -47,8 +44,8 @@ def _both(tmp_path, words):
     return outs
 
 
-def test_study_layers_on_a_local_cluster_gives_the_serial_numbers(section, tmp_path):
-    model, _ = section
+def test_study_layers_on_a_local_cluster_gives_the_serial_numbers(section_profiles, tmp_path):
+    model, _ = section_profiles
     serial, parallel = _both(tmp_path, ["study-layers", str(model), "--depth", "1,2", "--layers", "1,3"])
     assert (serial / "layer_study.csv").read_bytes() == (parallel / "layer_study.csv").read_bytes()
     a, b = _json(serial / "layer_study.json"), _json(parallel / "layer_study.json")
@@ -57,8 +54,8 @@ def test_study_layers_on_a_local_cluster_gives_the_serial_numbers(section, tmp_p
         assert len({row["code"] for row in csv.DictReader(fh)}) == 5
 
 
-def test_fit_material_on_a_local_cluster_follows_the_serial_trajectory(section, tmp_path):
-    model, defl = section
+def test_fit_material_on_a_local_cluster_follows_the_serial_trajectory(section_profiles, tmp_path):
+    model, defl = section_profiles
     serial, parallel = _both(tmp_path, ["fit-material", str(model), "--deflection", str(defl),
                                         "--free-layers", "2,3"])
     a, b = _json(serial / "fit.json"), _json(parallel / "fit.json")
@@ -110,8 +107,8 @@ def test_indent_scene_with_two_experiments_on_a_local_cluster(tmp_path):
 
 
 @pytest.mark.parametrize("command", ["study-layers", "fit-material", "indent"])
-def test_scheduler_refusals_are_one_line_and_write_nothing(section, tmp_path, capsys, monkeypatch, command):
-    model, defl = section
+def test_scheduler_refusals_are_one_line_and_write_nothing(section_profiles, tmp_path, capsys, monkeypatch, command):
+    model, defl = section_profiles
     extra = {"study-layers": [], "fit-material": ["--deflection", str(defl)],
              "indent": ["--indentor", "C5", "--depth", "0.5"]}[command]
     out = tmp_path / "out"

@@ -1,6 +1,4 @@
 """`pipeline.py indent` on a 2D cylinder model with bone: outputs, scenes, bad input, thesis trends."""
-import csv
-
 import numpy as np
 import pytest
 
@@ -8,25 +6,14 @@ import pipeline
 from fem.contact.indentors import make_indentor
 from fem.contact.linear import ContactModel
 from fem.io.modelfolder import open_model
-
-
-@pytest.fixture(scope="module")
-def cyl8(tmp_path_factory):
-    out = tmp_path_factory.mktemp("models") / "cyl8"
-    assert pipeline.main(["mesh", "--preset", "cylinder8", "--bone", "--out", str(out), "--quiet"]) == 0
-    return out
-
-
-def _rows(path):
-    with open(path) as fh:
-        return list(csv.DictReader(fh))
+from tests.helpers import ROOT, csv_rows
 
 
 def test_depth_series_outputs(cyl8, tmp_path):
     out = tmp_path / "c5"
     assert pipeline.main(["indent", str(cyl8), "--indentor", "C5", "--depth", "0.25:1:0.25",
                           "--out", str(out), "--quiet"]) == 0
-    rows = _rows(out / "C5.csv")
+    rows = csv_rows(out / "C5.csv")
     depth = [float(r["depth_mm"]) for r in rows]
     force = [float(r["force_N"]) for r in rows]
     assert depth == [0.25, 0.5, 0.75, 1.0]
@@ -37,7 +24,7 @@ def test_depth_series_outputs(cyl8, tmp_path):
     for name in ("C5_surface.csv", "C5_receptors.csv", "C5.pvd", "C5_003.vtu", "C5_force.png",
                  "C5_profile.png", "C5_receptors.png"):
         assert (out / name).is_file(), name
-    rec = _rows(out / "C5_receptors.csv")
+    rec = csv_rows(out / "C5_receptors.csv")
     assert {"sed_MPa", "max_compressive_strain", "depth_mm"} <= set(rec[0])
     assert {float(r["depth_mm"]) for r in rec} == {0.5, 0.75, 1.0}
 
@@ -49,7 +36,7 @@ def test_scene_with_force_control_and_sweep(cyl8, tmp_path):
                      'sweep = "x=-1:1:0.5"\n')
     out = tmp_path / "s"
     assert pipeline.main(["indent", str(cyl8), "--scene", str(scene), "--out", str(out), "--quiet"]) == 0
-    rows = _rows(out / "bar.csv")
+    rows = csv_rows(out / "bar.csv")
     assert [float(r["offset_x_mm"]) for r in rows] == [-1, -0.5, 0, 0.5, 1]
     np.testing.assert_allclose([float(r["force_N"]) for r in rows], 0.002, rtol=1e-5)
     d = [float(r["depth_mm"]) for r in rows]
@@ -91,12 +78,10 @@ def test_thesis_trend_cylinders_at_constant_force(cyl8):
 
 
 def test_shipped_scenes_are_valid():
-    from pathlib import Path
-
     from fem.contact.indentors import shapes_for
     from fem.experiments.scene import load_scene
 
-    scenes = sorted((Path(pipeline.__file__).parent / "scenes").glob("*.toml"))
+    scenes = sorted((ROOT / "scenes").glob("*.toml"))
     assert len(scenes) >= 8
     for path in scenes:
         for exp in load_scene(path).experiments:
@@ -109,17 +94,15 @@ def test_shipped_scenes_are_valid():
 
 @pytest.mark.parametrize("scene", ["bars", "two_point"])
 def test_2d_scenes_run(cyl8, tmp_path, scene):
-    from pathlib import Path
-
-    path = Path(pipeline.__file__).parent / "scenes" / f"{scene}.toml"
+    path = ROOT / "scenes" / f"{scene}.toml"
     assert pipeline.main(["indent", str(cyl8), "--scene", str(path), "--out", str(tmp_path / scene),
                           "--no-pvd", "--quiet"]) == 0
     if scene == "two_point":
-        rows = _rows(tmp_path / scene / "equal_force_2mm.csv")
+        rows = csv_rows(tmp_path / scene / "equal_force_2mm.csv")
         np.testing.assert_allclose([float(rows[0]["force_part0_N"]), float(rows[0]["force_part1_N"])],
                                    0.0005, rtol=1e-5)
     else:
-        peaks = [float(_rows(tmp_path / scene / f"bar_{w}.csv")[0]["force_N"]) for w in ("0.5", "1.5", "3.0")]
+        peaks = [float(csv_rows(tmp_path / scene / f"bar_{w}.csv")[0]["force_N"]) for w in ("0.5", "1.5", "3.0")]
         assert peaks[0] < peaks[1] < peaks[2]                 # wider bar, more force at 1 mm
 
 
@@ -165,10 +148,10 @@ def test_3d_block_model_folder(tmp_path):
     out = tmp_path / "out"
     assert pipeline.main(["indent", str(model_dir), "--indentor", "sphere:3", "--depth", "0.1,0.2",
                           "--material", "m33338", "--out", str(out), "--quiet"]) == 0
-    rows = _rows(out / "sphere_3.csv")
+    rows = csv_rows(out / "sphere_3.csv")
     assert 0 < float(rows[0]["force_N"]) < float(rows[1]["force_N"])
     assert all(r["kkt_ok"] == "True" for r in rows)
-    surf = _rows(out / "sphere_3_surface.csv")
+    surf = csv_rows(out / "sphere_3_surface.csv")
     loaded = [s for s in surf if float(s["force_N"]) > 0]
     assert loaded and all(abs(float(s["y_mm"])) < 1e-12 for s in loaded)
     near = [abs(float(s["x_mm"])) + abs(float(s["z_mm"]) - 3.0) for s in loaded]
@@ -189,7 +172,7 @@ def test_receptor_site_column_and_run_json(cyl8, tmp_path):
                      '[[experiment]]\nname = "bar"\nindentor = "bar:1.5"\nforce_N = 0.002\n')
     out = tmp_path / "s"
     assert pipeline.main(["indent", str(cyl8), "--scene", str(scene), "--out", str(out), "--quiet"]) == 0
-    rec = _rows(out / "c3_receptors.csv")
+    rec = csv_rows(out / "c3_receptors.csv")
     assert list(rec[0])[:6] == ["step", "site", "x_mm", "y_mm", "z_mm", "depth_mm"]
     by_step = {}
     for r in rec:

@@ -7,10 +7,7 @@ import pytest
 
 from fem.thesis import chapter4_gratings, chapter4_receptors
 from fem.thesis.findings import DIFFERS, REPRODUCED
-
-
-def _by_key(findings):
-    return {f.key: f for f in findings}
+from tests.helpers import by_key
 
 
 def test_point_load_profiles_and_receptive_fields(shop):
@@ -20,7 +17,7 @@ def test_point_load_profiles_and_receptive_fields(shop):
     disk 0.85 mm, compressive disk 1.27 mm, shear annulus 1.81 mm with a 0.25 mm hole (0.125 mm:
     0.27; thesis about 0.3). The profile under one load overstates the cylinders' fields by 17-45 %
     and matches the flat models within 4 %."""
-    f = _by_key(chapter4_receptors.point_load_fields(shop))
+    f = by_key(chapter4_receptors.point_load_fields(shop))
     depth = f["fig4-3_depth"]
     assert depth.verdict == REPRODUCED and 0.55 < depth.value < 0.75
     width = {(r["measure"], r["depth_mm"]): r["half_peak_width_mm"] for r in depth.table}
@@ -67,7 +64,7 @@ def test_bar_on_the_four_models(shop):
     cylinder with bone; 0.125 mm: 2.47-1.95). SED contrast 0.080 (square) against 0.186 (block,
     0.169 with free sides): the square is not the best, differs. |shear strain| contrast 0.96-1.0
     against at most 0.19. The bone: peak SED x 2.14, force x 1.34."""
-    f = _by_key(chapter4_receptors.rectangular_bars(shop))
+    f = by_key(chapter4_receptors.rectangular_bars(shop))
     assert f["fig4-7_edge_pressure"].verdict == REPRODUCED and 1.3 < f["fig4-7_edge_pressure"].value < 2.0
     rows = {r["model"]: r for r in f["fig4-7_edge_pressure"].table}
     assert f["fig4-7_model_contrast"].verdict == DIFFERS and f["fig4-7_model_contrast"].value < 0.7
@@ -88,7 +85,7 @@ def test_gratings_on_cylinders_and_block(shop):
     apart (differs: the 5 mm last gap). Off-centre profiles 0.152, 0.342 (8 mm), 0.049, 0.054
     (block). Central profiles cylinder against block 0.267, population responses 0.188 (differs)."""
     runs = chapter4_gratings.grating_runs(shop)
-    f = _by_key(chapter4_gratings.grating_findings(runs))
+    f = by_key(chapter4_gratings.grating_findings(runs))
     l8, l16, block = (label for _, label, _ in chapter4_gratings.GRATING_MODELS)
     assert runs[l8]["touching"].max() == 4 and runs[l16]["touching"].max() == 5
     assert np.all(runs[block]["touching"] == 8)

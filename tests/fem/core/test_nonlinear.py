@@ -5,7 +5,6 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 from scipy.optimize import brentq
-from test_biomech import section  # noqa: F401  (the coarse monkey section fixture)
 
 from fem.biomech.line_load import compare_line_load, line_load_model
 from fem.core.model import Model

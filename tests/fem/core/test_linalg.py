@@ -1,7 +1,6 @@
 """fem.core.linalg: PARDISO's Schur complement and Schur-path solves against dense linear algebra,
 the refined saddle solve, BLAS thread limits, and no environment changes."""
 import os
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,6 +9,7 @@ import scipy.sparse as sp
 from fem.core.linalg import Pardiso, SaddleFactor, blas_threads, solve_refined
 from fem.core.model import Model
 from fem.verify import closed_forms as ref
+from tests.helpers import ROOT
 
 
 def _saddle(n=40, m=12, seed=0):
@@ -198,7 +198,7 @@ def test_blas_limit_reaches_pardiso_loaded_after_a_first_limit():
             "    mkl = [i for i in _thread_controller().info() if i['internal_api'] == 'mkl']\n"
             "    print(len(mkl), [i['num_threads'] for i in mkl])\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
-                         cwd=str(Path(__file__).resolve().parents[1])).stdout.split("\n")[0]
+                         cwd=str(ROOT)).stdout.split("\n")[0]
     assert out == "1 [1]"
 
 

@@ -8,8 +8,6 @@ run without that work all ran before it).
 """
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import os
 import shutil
@@ -19,10 +17,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import pipeline
-
-ROOT = Path(__file__).resolve().parents[1]
-DATA = ROOT / "data"
+from tests.helpers import ROOT, cli, snapshot
 
 SETTINGS = settings(max_examples=60, deadline=None, derandomize=True, database=None,
                     suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
@@ -48,16 +43,6 @@ VALUES = st.one_of(
     st.integers(-10**9, 10**9).map(str))
 
 
-def cli(argv) -> tuple[int, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        try:
-            code = pipeline.main([str(a) for a in argv])
-        except Started:
-            code = 0
-    return code, err.getvalue()
-
-
 @pytest.fixture(scope="module")
 def work(tmp_path_factory):
     """A 2D cylinder8 model, a run folder of it, a tiny turntable folder; cwd is the work folder
@@ -66,9 +51,9 @@ def work(tmp_path_factory):
     cwd = os.getcwd()
     os.chdir(base)
     model = base / "cyl8"
-    assert cli(["mesh", "--preset", "cylinder8", "--bone", "--out", model, "--quiet"])[0] == 0
-    assert cli(["indent", model, "--indentor", "C5", "--depth", "0.5", "--out", base / "run", "--quiet",
-                "--no-pvd"])[0] == 0
+    assert cli("mesh", "--preset", "cylinder8", "--bone", "--out", model, "--quiet").code == 0
+    assert cli("indent", model, "--indentor", "C5", "--depth", "0.5", "--out", base / "run", "--quiet",
+               "--no-pvd").code == 0
     tt = base / "turntable"
     tt.mkdir()
     for p in sorted((ROOT / "sample_images").iterdir())[:5]:
@@ -90,21 +75,17 @@ def work(tmp_path_factory):
     os.chdir(cwd)
 
 
-def files(folder: Path) -> set:
-    return {p for p in folder.rglob("*")}
-
-
 def check(base: Path, argv) -> None:
     """The promise of the command line for one argv."""
-    before = files(base)
-    code, err = cli(argv)
+    before = snapshot(base)
+    code, _, err, _ = cli(*argv, accept=Started)
     assert "Traceback" not in err, (argv, err)
     assert code in (0, 2), (argv, code, err)
     if code == 2:
         lines = [line for line in err.splitlines() if line.strip()]
         assert len(lines) == 1 and lines[0].startswith("error: "), (argv, err)
-        assert files(base) == before, (argv, files(base) - before)
-    for new in files(base) - before:                     # an accepted run's outputs: start clean again
+        assert snapshot(base) == before, (argv, snapshot(base) - before)
+    for new in snapshot(base) - before:                     # an accepted run's outputs: start clean again
         if new.exists() and new.parent in before | {base}:
             shutil.rmtree(new) if new.is_dir() else new.unlink()
 

@@ -1,9 +1,7 @@
 """Spiking afferents driven by the finite-element finger (fem.experiments.traces, fem.receptors.afferents, fem.experiments.scene's
 [afferents] and [experiment.trace]): the shipped ramp-and-hold scene end to end, and the
 behaviours every afferent paper shows, on the 1 mm monkey preset (the session Workshop)."""
-import csv
 import dataclasses
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,13 +13,9 @@ from fem.experiments.traces import fractions
 from fem.io.modelfolder import read_model
 from fem.receptors.afferents import Population, experiment_inputs, respond, sampler_of
 from fingertip.errors import InputError
+from tests.helpers import ROOT, csv_rows
 
-SCENE = Path(__file__).resolve().parents[1] / "scenes" / "ramp_hold.toml"
-
-
-def _rows(path):
-    with open(path, newline="") as fh:
-        return list(csv.DictReader(fh))
+SCENE = ROOT / "scenes" / "ramp_hold.toml"
 
 
 def test_ramp_hold_scene_end_to_end(shop, tmp_path):
@@ -32,7 +26,7 @@ def test_ramp_hold_scene_end_to_end(shop, tmp_path):
     out = tmp_path / "run"
     assert pipeline.main(["indent", str(shop.preset("monkey")), "--scene", str(SCENE), "--out", str(out),
                           "--quiet"]) == 0
-    spikes, aff = _rows(out / "ramp_hold" / "spikes.csv"), _rows(out / "ramp_hold" / "afferents.csv")
+    spikes, aff = csv_rows(out / "ramp_hold" / "spikes.csv"), csv_rows(out / "ramp_hold" / "afferents.csv")
     assert {"afferent_id", "class", "time_s", "x_mm", "z_mm", "depth_mm"} <= set(spikes[0])
     assert (out / "ramp_hold" / "raster.png").stat().st_size > 5000
     assert (out / "ramp_hold" / "rate_map.png").stat().st_size > 5000
@@ -53,7 +47,7 @@ def test_ramp_hold_scene_end_to_end(shop, tmp_path):
 
 
 @pytest.fixture(scope="module")
-def monkey(shop):
+def monkey_line(shop):
     """(model, surface, line of pad nodes across x at the pad's middle z, sorted by x) with the
     shipped scene's material."""
     model, info = read_model(shop.preset("monkey"), load_scene(SCENE).material)
@@ -71,10 +65,10 @@ def _line_population(sn, line) -> Population:
                       sn.normal[both], np.r_[np.full(k, 0.3), np.full(k, 1.6)])
 
 
-def _drive(monkey, experiment: dict, population, zmid_position: float | None = None):
+def _drive(monkey_line, experiment: dict, population, zmid_position: float | None = None):
     """PopulationResponse of a population to one traced experiment on the monkey (noise off);
     zmid_position: x of the indentor at the pad's middle z (default: the scene's default place)."""
-    model, info, _, _, zmid = monkey
+    model, info, _, _, zmid = monkey_line
     if zmid_position is not None:
         experiment = {**experiment, "position_mm": [zmid_position, zmid]}
     run = run_experiments(model, info, Scene.from_dict({"experiment": [experiment]}))
@@ -83,15 +77,15 @@ def _drive(monkey, experiment: dict, population, zmid_position: float | None = N
     return respond(population, e.experiment.times_s, static, deflection, noisy=False)
 
 
-def test_rates_grow_with_depth(monkey):
+def test_rates_grow_with_depth(monkey_line):
     """A 2 mm probe held 0.5 and 1.0 mm deep on the line of afferents. Measured: SA1 hold rates
     summed over the line 78 -> 233 Hz, RA ramp rates 0 -> 350 Hz; the same afferents answer twice
     identically (noise off)."""
-    _, _, sn, line, _ = monkey
+    _, _, sn, line, _ = monkey_line
     pop = _line_population(sn, line)
     k = len(line)
     trace = {"shape": "ramp_hold", "samples": 30}
-    shallow, deep = (_drive(monkey, {"indentor": "punch:2", "depth_mm": d, "trace": trace}, pop) for d in (0.5, 1.0))
+    shallow, deep = (_drive(monkey_line, {"indentor": "punch:2", "depth_mm": d, "trace": trace}, pop) for d in (0.5, 1.0))
     hold = [r.rates_hz(0.15, 0.6)[:k].sum() for r in (shallow, deep)]
     ramp = [r.rates_hz(0.0, 0.12)[k:].sum() for r in (shallow, deep)]
     assert hold[1] > 1.5 * hold[0] > 0 and ramp[1] > ramp[0] and ramp[1] > 0
@@ -99,18 +93,18 @@ def test_rates_grow_with_depth(monkey):
     assert all(np.array_equal(a, b) for a, b in zip(again.spikes, deep.spikes))
 
 
-def test_sa1_resolve_grating_bars_that_ra_blur(monkey):
+def test_sa1_resolve_grating_bars_that_ra_blur(monkey_line):
     """A grating of 1.5 mm bars and 1.5 mm gaps across the pad, 0.75 mm deep, the central gap over
     x = 0. Measured: SA1 hold rates up to 18 Hz under the two central bars and 0 over the gap
     between them (gap / bar 0.0); RA ramp rates one plateau across both (8-25 Hz, gap / bar 1.0)."""
-    _, _, sn, line, _ = monkey
+    _, _, sn, line, _ = monkey_line
     pop = _line_population(sn, line)
     k, x = len(line), sn.x[line, 0]
     n, bar = 6, 1.5
     start = -(n * bar + (n - 1) * bar) / 2
     grating = {"indentor": f"grating:{bar}:" + ",".join([str(bar)] * (n - 1)), "depth_mm": 0.75,
                "trace": {"shape": "ramp_hold", "samples": 30}}
-    resp = _drive(monkey, grating, pop, start)
+    resp = _drive(monkey_line, grating, pop, start)
     gap = np.abs(x) < 0.5
     bars = (np.abs(np.abs(x) - 1.5) < 0.5)
     sa1, ra = resp.rates_hz(0.15, 0.6)[:k], resp.rates_hz(0.0, 0.12)[k:]

@@ -2,13 +2,12 @@
 `python pipeline.py`."""
 import shutil
 import subprocess
-from pathlib import Path
 
 import pytest
 
 import pipeline
+from tests.helpers import ROOT
 
-ROOT = Path(pipeline.__file__).resolve().parent
 FINGERTIP = shutil.which("fingertip")
 pytestmark = pytest.mark.skipif(FINGERTIP is None, reason="console script not installed (pip install -e .)")
 

@@ -29,6 +29,7 @@ from fem.receptors.probes import (
     two_point_curves,
 )
 from fingertip.errors import InputError
+from tests.helpers import write_csv
 
 SCENE = """[receptors]
 depths_mm = "0.5:1:0.125"
@@ -181,12 +182,6 @@ def test_analyze_command_writes_tables_and_plots(models, tmp_path, capsys):
     assert (out / "ranking_combined.md").read_text().count("\n|") >= len(rows) + 1
 
 
-def _bad_csv(tmp_path, text):
-    p = tmp_path / "bad.csv"
-    p.write_text(text)
-    return p
-
-
 @pytest.mark.parametrize("text, extra, message", [
     ("stimulus,position_mm\ngrating,0.0\n", [], "lacks column(s) ['rate_ips']"),
     ("stimulus,position_mm,rate_ips\ngrating,0.0,nan\n", [], "rate_ips is empty or NaN"),
@@ -202,7 +197,7 @@ def _bad_csv(tmp_path, text):
 ])
 def test_bad_input_one_line_exit_2_nothing_written(models, tmp_path, capsys, text, extra, message):
     out = tmp_path / "report"
-    code = pipeline.main(["analyze", str(models[8] / "sweeps"), "--neural", str(_bad_csv(tmp_path, text)),
+    code = pipeline.main(["analyze", str(models[8] / "sweeps"), "--neural", str(write_csv(tmp_path, text, "bad.csv")),
                           *extra, "--out", str(out)])
     err = capsys.readouterr().err.strip()
     assert code == 2 and err.startswith("error:") and message in err and "\n" not in err, err
@@ -210,7 +205,7 @@ def test_bad_input_one_line_exit_2_nothing_written(models, tmp_path, capsys, tex
 
 
 def test_neural_csv_comments_aliases_and_defaults(tmp_path):
-    p = _bad_csv(tmp_path, "# synthetic\nstimulus,position_mm,rate_imp_s\ngrating,0.5,12\nbar,-0.2,3.5\n")
+    p = write_csv(tmp_path, "# synthetic\nstimulus,position_mm,rate_imp_s\ngrating,0.5,12\nbar,-0.2,3.5\n")
     data = read_neural_csv(p)
     assert data.stimuli == ["grating", "bar"] and data.units == ["unit"]
     np.testing.assert_allclose(data.rate_ips, [12, 3.5])

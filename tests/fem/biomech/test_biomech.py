@@ -22,6 +22,7 @@ from fem.verify.closed_forms import (
     waterbed_deflection,
 )
 from fingertip.errors import InputError
+from tests.helpers import write_csv
 
 
 # --------------------------------------------------------------------------- closed forms
@@ -83,21 +84,15 @@ def test_side_profile_averages_both_sides():
 
 
 # --------------------------------------------------------------------------- CSV and codes
-def _write(tmp_path, text, name="d.csv"):
-    p = tmp_path / name
-    p.write_text(text)
-    return p
-
-
 def test_csv_reading(tmp_path):
-    prof = read_deflection_csv(_write(tmp_path, "# synthetic\ndepth_mm,distance_mm,deflection_mm\n"
+    prof = read_deflection_csv(write_csv(tmp_path, "# synthetic\ndepth_mm,distance_mm,deflection_mm\n"
                                                 "2,0.1,1.9\n2,0.5,1.2\n1,0.1,0.95\n1,0.4,0.7\n"))
     assert [p.depth_mm for p in prof] == [1.0, 2.0]
     np.testing.assert_allclose(prof[1].distance_mm, [0.1, 0.5])
     np.testing.assert_allclose(prof[1].deflection_mm, [1.9, 1.2])
-    prof = read_deflection_csv(_write(tmp_path, "0.1,0.9,1\n0.2,0.8,1\n"))      # no header: column order
+    prof = read_deflection_csv(write_csv(tmp_path, "0.1,0.9,1\n0.2,0.8,1\n"))      # no header: column order
     np.testing.assert_allclose(prof[0].deflection_mm, [0.9, 0.8])
-    depth, force = read_force_csv(_write(tmp_path, "Depth_mm,Force_N\n0.5,0.1\n1.0,0.3\n", "f.csv"))
+    depth, force = read_force_csv(write_csv(tmp_path, "Depth_mm,Force_N\n0.5,0.1\n1.0,0.3\n", "f.csv"))
     np.testing.assert_allclose(force, [0.1, 0.3])
 
 
@@ -116,7 +111,7 @@ def test_csv_reading(tmp_path):
 ])
 def test_bad_deflection_csv(tmp_path, text, message):
     with pytest.raises(InputError, match=message) as err:
-        read_deflection_csv(_write(tmp_path, text))
+        read_deflection_csv(write_csv(tmp_path, text))
     assert "\n" not in str(err.value)
 
 
@@ -129,15 +124,7 @@ def test_codes():
 
 
 # --------------------------------------------------------------------------- on a finite-element model
-@pytest.fixture(scope="module")
-def section(tmp_path_factory):
-    """Coarse five-layer 2D cross-section of the monkey model (~4k DOFs)."""
-    out = tmp_path_factory.mktemp("biomech") / "msec"
-    assert pipeline.main(["mesh", "--preset", "monkey", "--section-z", "5", "--size", "0.25",
-                          "--out", str(out), "--quiet"]) == 0
-    return out
-
-
+# `section` (tests/conftest.py): this module's copy of the coarse five-layer monkey section (~4k DOFs)
 @pytest.fixture(scope="module")
 def exp(section):
     return DeflectionExperiment(section)
@@ -270,8 +257,8 @@ def test_study_layers_and_fit_material_commands(section, exp, tmp_path):
              "distance_mm,deflection_mm,depth_mm"]
     for p in exp.profiles(truth, [1.0, 2.0]):
         lines += [f"{d:.2f},{w:.6f},{p.depth_mm:g}" for d, w in zip(np.arange(0.2, 3.0, 0.2), p.at(np.arange(0.2, 3.0, 0.2)))]
-    csv = _write(tmp_path, "\n".join(lines) + "\n")
-    fcsv = _write(tmp_path, "depth_mm,force_N\n0.5,0.004\n1.0,0.01\n", "force.csv")
+    csv = write_csv(tmp_path, "\n".join(lines) + "\n")
+    fcsv = write_csv(tmp_path, "depth_mm,force_N\n0.5,0.004\n1.0,0.01\n", "force.csv")
     out = tmp_path / "study"
     assert pipeline.main(["study-layers", str(section), "--depth", "2.0", "--layers", "1,3",
                           "--deflection", str(csv), "--out", str(out), "--quiet"]) == 0
@@ -324,8 +311,8 @@ def test_line_load_and_contact_series_commands(section, tmp_path):
     (["contact-series", "{model}", "--force", "0.001", "--material", "m43"], "has 2 digits"),
 ])
 def test_bad_input_one_line_exit_2(section, tmp_path, capsys, args, message):
-    empty = _write(tmp_path, "", "empty.csv")
-    unsorted = _write(tmp_path, "0.5,1,2\n0.2,1.5,2\n", "unsorted.csv")
+    empty = write_csv(tmp_path, "", "empty.csv")
+    unsorted = write_csv(tmp_path, "0.5,1,2\n0.2,1.5,2\n", "unsorted.csv")
     out = tmp_path / "out"
     argv = [a.format(model=section, empty=empty, unsorted=unsorted) for a in args] + ["--out", str(out)]
     assert pipeline.main(argv) == 2
