@@ -8,15 +8,13 @@ centroid exceeds 0.5 (0 = outside, dropped). Its surface simplification is skipp
 already clean, and it is a large share of the meshing time). A background sizing
 field (pytetwild's `bg_*` arguments) asks for `size_mm` in the top `fine_depth_mm` of the volar
 skin, growing by `growth` mm per mm of distance from that zone up to `coarse_mm`.
-pytetwild output differs from run to run: meshes are cached by a hash of all inputs.
+pytetwild runs in a worker process made reproducible (`fem.geometry.tetwild`): the same inputs give
+the same mesh; meshes are also cached by a hash of all inputs, so a second run reads its first's.
 """
 from __future__ import annotations
 
 import hashlib
 import json
-import multiprocessing
-import os
-import signal
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -25,14 +23,16 @@ import igl
 import meshio
 import numpy as np
 
+from fem.geometry.tetwild import fixed_seed_library, run_tetwild
 from fem.geometry.layered import N_LAYERS, LayeredModel, check_positive
 from fingertip.declare import declared, positive
 from fingertip.errors import InputError
 from fingertip.progress import as_progress, cache_root
 from fingertip.staging import atomic_write, staged_output, write_json
 
-#: bump when tetrahedralize() changes, so cached meshes are not reused
-MESHER_VERSION = 1
+#: bump when tetrahedralize() changes, so cached meshes are not reused (2: pytetwild reproducible,
+#: one thread and a fixed seed)
+MESHER_VERSION = 2
 
 
 @dataclass(frozen=True)
@@ -131,47 +131,21 @@ def expected_tets(bg_t, bg_v) -> float:
     return float(np.sum(6 * np.sqrt(2) / np.mean(bg_v[bg_t], axis=1) ** 3)) * BACKGROUND_SPACING_MM ** 3 / 5
 
 
-def tetrahedralize(model: LayeredModel, sizing: Sizing, threads: int = 0):
+def tetrahedralize(model: LayeredModel, sizing: Sizing):
     """Run pytetwild on the merged shells -> (points (P, 3), tets (T, 4)) of the tets inside the
     outer shell, unused points removed."""
     sizing.check()
     v, f = model.vertices(), model.faces().astype(np.int32)
     diag = float(np.linalg.norm(v.max(0) - v.min(0)))
     bg_p, bg_t, bg_v = background_mesh(model, sizing)
-    pts, tets = in_worker(_tetwild, {
+    pts, tets = run_tetwild({
         "vertices": v, "faces": f, "edge_length_abs": sizing.coarse_mm, "epsilon": sizing.epsilon_mm / diag,
         "vtk_ordering": True, "quiet": True, "simplify": False, "disable_filtering": True,
-        "num_opt_iter": sizing.opt_iter, "num_threads": threads,
-        "bg_vertices": bg_p, "bg_tets": bg_t, "bg_values": bg_v})
+        "num_opt_iter": sizing.opt_iter, "bg_vertices": bg_p, "bg_tets": bg_t, "bg_values": bg_v})
     keep = label_tets(model, pts, tets) > 0
     tets = tets[keep]
     used, tets = np.unique(tets, return_inverse=True)
     return pts[used], tets.reshape(-1, 4).astype(np.int64)
-
-
-def _tetwild(kwargs):
-    """pytetwild.tetrahedralize(**kwargs): (points (P, 3), tets (T, 4)); run by `in_worker`."""
-    import pytetwild  # 0.17 s of import: only where the mesh is built (a worker process)
-
-    return pytetwild.tetrahedralize(**kwargs)
-
-
-def _worker_init():
-    """A worker leaves interrupts to its caller: its own process group, so a terminal's Ctrl-C
-    reaches only the caller, which then ends the worker."""
-    os.setpgid(0, 0)
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
-def in_worker(func, *args):
-    """func(*args) in a spawned worker process; returns its result.
-
-    pytetwild's C++ (geogram) replaces the process's SIGINT handler, so Ctrl-C during a meshing
-    in the caller's process killed it on the spot, without the one-line message or any cleanup.
-    In a worker the caller keeps its handlers and waits interruptibly; on any exception
-    (KeyboardInterrupt included) the worker is terminated."""
-    with multiprocessing.get_context("spawn").Pool(1, initializer=_worker_init) as pool:
-        return pool.apply_async(func, args).get()
 
 
 def label_tets(model: LayeredModel, points: np.ndarray, tets: np.ndarray) -> np.ndarray:
@@ -341,8 +315,9 @@ def cache_dir() -> Path:
 
 
 def mesh_key(model: LayeredModel, sizing: Sizing) -> str:
-    """sha256 of everything the tets depend on: the layer surfaces (rings, z, tip), sizing, mesher.
-    Region parameters are left out: they change the tags, not the tets."""
+    """sha256 of everything the tets depend on: the layer surfaces (rings, z, tip), sizing, mesher
+    (and whether it runs reproducibly: an unreproducible mesh is never read for a reproducible
+    one). Region parameters are left out: they change the tags, not the tets."""
     import pytetwild  # its version is part of the key; 0.17 s of import, paid once a command meshes
 
     h = hashlib.sha256()
@@ -350,7 +325,8 @@ def mesh_key(model: LayeredModel, sizing: Sizing) -> str:
     h.update(np.ascontiguousarray(model.z_mm).tobytes())
     if model.rounded:
         h.update(json.dumps([model.derived["tip_lengths_mm"], model.derived["tip_levels"]]).encode())
-    h.update(json.dumps([MESHER_VERSION, asdict(sizing), pytetwild.__version__],
+    h.update(json.dumps([MESHER_VERSION, asdict(sizing), pytetwild.__version__] +
+                        ([] if fixed_seed_library() is not None else ["unreproducible"]),
                         sort_keys=True, default=str).encode())
     return h.hexdigest()
 
@@ -371,7 +347,8 @@ def outputs_current(out_dir, key: str) -> bool:
 
 
 def build_mesh(model: LayeredModel, sizing: Sizing, force: bool = False, progress=None):
-    """Mesh the model (from the cache unless force) -> (TetMesh, info {key, cached, mesh_s}).
+    """Mesh the model (from the cache unless force) -> (TetMesh, info {key, cached, mesh_s,
+    warnings, reproducible (whether pytetwild ran with its fixed seed, `fem.geometry.tetwild`)}).
     progress: optional `fingertip.progress` object (None: silent)."""
     progress = as_progress(progress)
     sizing.check()
@@ -399,7 +376,8 @@ def build_mesh(model: LayeredModel, sizing: Sizing, force: bool = False, progres
     with progress.task("labelling layers and regions", kind="label-tets", size=len(tets)):
         layer = label_tets(model, points, tets)
         mesh = TetMesh(points, tets, layer, region_tags(model, points, tets))
-    return mesh, {"key": key, "cached": cached, "mesh_s": mesh_s, "warnings": warnings}
+    return mesh, {"key": key, "cached": cached, "mesh_s": mesh_s, "warnings": warnings,
+                  "reproducible": fixed_seed_library() is not None}
 
 
 class CacheEntryError(Exception):
@@ -426,6 +404,7 @@ def write_mesh(out_dir, model: LayeredModel, sizing: Sizing, mesh: TetMesh, rep:
     data = model.to_json()
     data.update({"inputs_key": inputs_key(model, sizing), "sizing": asdict(sizing),
                  "mesh": {**rep, "cache_key": info["key"], "from_cache": info["cached"], "mesh_seconds": info["mesh_s"],
+                          "reproducible": info["reproducible"],
                           "file": "mesh.vtu", "cells": "tetra (linear, positive orientation)"}})
     with staged_output(out_dir) as tmp:
         meshio.write(tmp / "mesh.vtu", mesh.to_meshio())

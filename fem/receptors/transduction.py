@@ -237,9 +237,8 @@ def spike_trains(classes, model_index, static_MPa, dynamic, noisy=False, seed=0,
         return [np.zeros(0) for _ in range(n)]
     noisy = np.broadcast_to(np.asarray(noisy, bool), (n,))
 
-    from scipy import (
-        signal,  # 0.45 s of import, which every command running no afferents does without
-    )
+    # scipy.signal: 0.45 s of import, which every command running no afferents does without
+    from scipy import signal
 
     # low-pass per published model: the dynamic input always, the static one for SA1 only
     groups = np.unique(np.stack([class_id, idx], axis=1), axis=0)
