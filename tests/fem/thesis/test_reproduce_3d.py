@@ -10,11 +10,12 @@ from tests.helpers import by_key
 
 
 def test_bar_in_3d_bends_the_stiff_epidermis_and_stays_local(shop):
-    """Measured: SED 1.0 / 0.75 mm deep 1.17 (m43338), 0.97 (m33338); 86 % and 84 % of the section
-    below 10 % of the peak SED (thesis 85 %); deflection 1 mm beside the bar 1.40x with m43338."""
+    """Measured on the quick (1 mm, reproducible) mesh: SED 1.0 / 0.75 mm deep 1.23 (m43338), 0.94
+    (m33338); 86 % and 82 % of the section below 10 % of the peak SED (thesis 85 %); deflection
+    1 mm beside the bar 1.34x with m43338."""
     f = by_key(thesis3d.bars_3d(shop))
     depth, local, gradual = f["fig6-25_bar_depth"], f["fig7-4_local"], f["sec7-1-2_gradual"]
-    assert depth.verdict == REPRODUCED and depth.value == pytest.approx(1.17, abs=0.05)
+    assert depth.verdict == REPRODUCED and depth.value == pytest.approx(1.23, abs=0.05)
     rows = {r["material"]: r for r in depth.table}
     assert rows["m33338"]["sed_peak_1.0mm_MPa"] < rows["m33338"]["sed_peak_0.75mm_MPa"]
     assert local.verdict == REPRODUCED
@@ -24,16 +25,17 @@ def test_bar_in_3d_bends_the_stiff_epidermis_and_stays_local(shop):
 
 
 def test_2d_section_against_3d(shop):
-    """Measured (1 mm elements): 3D / 2D peak max compressive strain 1.25 with profiles correlated
-    0.998; 2D / 3D peak SED 0.79 against the thesis's > 1 (0.5 mm elements: 1.26 and 0.78 at equal
-    line loads, the plane-strain factor 1 / (1 - nu^2) = 1.30 within 4 %); the section 2 mm off is
-    less strained (SED 0.99x)."""
+    """Measured (1 mm elements, the reproducible mesh): 3D / 2D peak max compressive strain 1.26 with
+    profiles correlated 0.997; 2D / 3D peak SED 0.78 against the thesis's > 1 (the plane-strain
+    factor 1 / (1 - nu^2) = 1.30 times the load ratio 0.96 within 1 %). The section 2 mm off is
+    *more* strained here (SED 1.14x): on earlier realisations of the same 1 mm mesh this ratio was
+    0.99 and 1.03, so at this size the claim is inside the mesh's noise."""
     f = by_key(thesis3d.sections_2d_3d(shop))
     eps, sed, off = f["fig7-2_eps1"], f["fig7-2_sed"], f["fig7-3_off_centre"]
     assert eps.value == pytest.approx(1.25, abs=0.06) and eps.verdict == DIFFERS
     assert "correlation of the two profiles 0.99" in eps.reason and "1 / 1.30 at nu = 0.48" in eps.reason
     assert sed.verdict == DIFFERS and 0.7 < sed.value < 0.9
-    assert off.verdict == REPRODUCED and off.value < 1
+    assert off.verdict == DIFFERS and off.value == pytest.approx(1.14, abs=0.03)
 
 
 def test_step_across_the_pad(shop):
