@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+from importlib import metadata
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -318,14 +319,12 @@ def mesh_key(model: LayeredModel, sizing: Sizing) -> str:
     """sha256 of everything the tets depend on: the layer surfaces (rings, z, tip), sizing, mesher
     (and whether it runs reproducibly: an unreproducible mesh is never read for a reproducible
     one). Region parameters are left out: they change the tags, not the tets."""
-    import pytetwild  # its version is part of the key; 0.17 s of import, paid once a command meshes
-
     h = hashlib.sha256()
     h.update(np.ascontiguousarray(model.rings).tobytes())
     h.update(np.ascontiguousarray(model.z_mm).tobytes())
     if model.rounded:
         h.update(json.dumps([model.derived["tip_lengths_mm"], model.derived["tip_levels"]]).encode())
-    h.update(json.dumps([MESHER_VERSION, asdict(sizing), pytetwild.__version__] +
+    h.update(json.dumps([MESHER_VERSION, asdict(sizing), metadata.version("pytetwild")] +
                         ([] if fixed_seed_library() is not None else ["unreproducible"]),
                         sort_keys=True, default=str).encode())
     return h.hexdigest()

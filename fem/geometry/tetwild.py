@@ -10,8 +10,9 @@ in every run (docs/model-and-mesh.md). The library is built once, from the C sou
 the machine's C compiler into the cache folder; without a compiler (or off Linux) meshes stay
 unreproducible and a warning says so.
 
-The worker is also where pytetwild's C++ may replace signal handlers: a terminal's Ctrl-C reaches
-the caller only (the worker has a session of its own), which then ends the worker.
+The worker is also the only process that imports pytetwild, whose C++ (geogram) replaces the
+process's SIGINT handler on import: the caller keeps Python's, a terminal's Ctrl-C reaches the
+caller only (the worker has a session of its own), and the caller then ends the worker.
 
     points, tets = run_tetwild({"vertices": v, "faces": f, ...})     # pytetwild.tetrahedralize's keywords
 """
