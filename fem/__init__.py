@@ -16,7 +16,17 @@ each other):
 The public names of every subpackage are names of `fem` too (`from fem import Model, run_scene`),
 imported at first use (`fingertip.lazy`), so `import fem` stays light.
 """
-from fem import biomech, contact, core, experiments, geometry, io, receptors, thesis, verify
+from fem import (
+    biomech,
+    contact,
+    core,
+    experiments,
+    geometry,
+    io,
+    receptors,
+    thesis,
+    verify,
+)
 from fingertip.errors import InputError
 from fingertip.lazy import lazy_exports
 

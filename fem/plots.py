@@ -113,10 +113,50 @@ def indent_pressure_figure(name: str, along_mm, across_mm, pressure_MPa, depth_m
 
 
 
+def judged_step(run) -> int:
+    """Index of the indentation an experiment's single-state figures show: the deepest one (a
+    trace's hold, not its release; the last of a depth series; the first of equal depths)."""
+    depth = np.array([r.depth_mm.max() for _, r in run.steps])
+    return int(np.flatnonzero(depth >= depth.max() - 1e-12)[0])
+
+
+def profile_steps(run, sweep: bool, most: int = 8) -> list[int]:
+    """Indices of the indentations whose surface profiles are drawn: a sweep's judged one; else up
+    to `most` of the distinct depths up to the deepest, evenly spread (a trace's ramp, a series)."""
+    if sweep:
+        return [judged_step(run)]
+    depth = np.array([r.depth_mm.max() for _, r in run.steps])
+    last = judged_step(run)
+    levels, first = np.unique(np.round(depth[:last + 1], 9), return_index=True)
+    pick = np.unique(np.round(np.linspace(0, len(levels) - 1, min(most, len(levels)))).astype(int))
+    return sorted(first[pick].tolist())
+
+
+def receptor_profile(scene_run, ind):
+    """(site coordinate (s,) mm, its label, sites (s,) bool) the receptor figure plots a profile
+    along: the sites on the indentor's centre line across it (within 0.5 mm, or the nearest);
+    where that leaves a single site per depth (a receptor line along the indentor's length, a
+    line of one site), the sites along the receptor line or the indentor's length instead."""
+    g = scene_run.sampler.grid
+    x = pad3(g.sites_mm) - ind.origin_mm
+    u, v = x @ ind.e1, x @ ind.e2
+    across = np.abs(u) <= max(0.5, np.abs(u).min() + 1e-9)
+    if len(np.unique(np.round(v[across], 6))) > 1:
+        return v, "receptor site across the indentor (on its centre line), mm", across
+    if scene_run.line is not None:              # sites on a plane: along the coordinate that varies
+        free = [a for a in range(pad3(g.sites_mm).shape[1]) if a != scene_run.line[0]]
+        axis = max(free, key=lambda a: np.ptp(pad3(g.sites_mm)[:, a]))
+        return pad3(g.sites_mm)[:, axis], f"receptor site along {'xyz'[axis]} on the receptor line, mm", \
+            np.ones(len(u), bool)
+    along = np.abs(v) <= max(0.5, np.abs(v).min() + 1e-9)
+    return u, "receptor site along the indentor (under its centre), mm", along
+
+
 def indent_figures(run, scene_run, tables) -> dict[str, Figure]:
     """{file name: Figure} of one experiment (fem.experiments.runner.ExperimentRun of a SceneRun, with its
     fem.io.runfolder.run_tables): <name>_force.png (two or more indentations), _profile.png,
-    _receptors.png and (3D) _pressure.png."""
+    _receptors.png and (3D) _pressure.png. Single-state figures show the judged indentation
+    (`judged_step`: a trace's hold, not its release)."""
     figures = {}
     name, ind, steps, rows = run.name, run.indentor, run.steps, tables["steps"]
     sweep = len({tuple(o) for o, _ in steps}) > 1
@@ -128,46 +168,47 @@ def indent_figures(run, scene_run, tables) -> dict[str, Figure]:
                                                            rows["max_pressure_MPa"], dim,
                                                            rows["depth_mm"] if key != "depth_mm" and
                                                            run.experiment.force_N is not None else None)
-    # deflection and pressure across the indentor (nodes near its centre line), last step(s)
+    # deflection and pressure across the indentor (nodes near its centre line)
     x3 = pad3(scene_run.surface.x)
     u, v = (x3 - ind.origin_mm) @ ind.e1, (x3 - ind.origin_mm) @ ind.e2
     near = np.abs(u) <= max(0.5, np.sort(np.abs(u))[min(len(u) - 1, 50)])
     order = np.argsort(v[near])
-    shown = [(f"{r.depth_mm.max():.2f} mm", r.deflection_mm[near][order], r.pressure_MPa[near][order])
-             for _, r in (steps[-8:] if not sweep else steps[-1:])]
+    shown = [(f"{steps[i][1].depth_mm.max():.2f} mm", steps[i][1].deflection_mm[near][order],
+              steps[i][1].pressure_MPa[near][order]) for i in profile_steps(run, sweep)]
     figures[f"{name}_profile.png"] = indent_profile_figure(name, v[near][order], shown)
-    # receptor measures: profile across the pad (last step) or against the sweep position
+    # receptor measures: profile along the sites (judged step) or against the sweep position
     g = scene_run.sampler.grid
-    site_x = pad3(g.sites_mm) - ind.origin_mm
-    site_u, site_v = site_x @ ind.e1, site_x @ ind.e2
-    # a pad grid in 3D: only the sites on the indentor's centre line (within 0.5 mm, or the nearest)
-    on_line = np.abs(site_u) <= max(0.5, np.abs(site_u).min() + 1e-9)
+    j = judged_step(run)
+    coord, xlabel, on = receptor_profile(scene_run, ind)
     curves = {}
     for m in scene_run.measures:
         curves[m] = []
         for d in np.unique(g.depth_mm):
-            sel = (g.depth_mm == d) & on_line[g.site]
+            sel = (g.depth_mm == d) & on[g.site]
             if sweep:
-                j = np.flatnonzero(sel)[np.argmin(np.abs(site_v[g.site[sel]]))]
-                curves[m].append((f"{d:g} mm", rows[key], tables["values"][m][:, j], "-"))
+                k = np.flatnonzero(sel)[np.argmin(np.abs(coord[g.site[sel]]))]
+                curves[m].append((f"{d:g} mm", rows[key], tables["values"][m][:, k], "-"))
             else:
-                o = np.argsort(site_v[g.site[sel]])
-                curves[m].append((f"{d:g} mm", site_v[g.site[sel]][o], tables["values"][m][-1][sel][o], ".-"))
-    xlabel = KEY_LABELS[key] if sweep else "receptor site across the indentor (on its centre line), mm"
-    last = steps[-1][1]
-    load = (f"force {last.total_force_N:.3g} {force_unit(dim)}" if run.experiment.force_N is not None
-            else f"depth {last.depth_mm.max():.3g} mm")
-    if sweep:
-        title = f"{name}: receptors under the indentor's centre line at each offset ({load})"
-    else:
-        title = (f"{name}: receptors of indentation {len(steps)} of {len(steps)} ({load}, depth reached "
-                 f"{last.depth_mm.max():.3g} mm)" if run.experiment.force_N is not None
-                 else f"{name}: receptors of indentation {len(steps)} of {len(steps)} ({load})")
-    figures[f"{name}_receptors.png"] = indent_receptors_figure(curves, xlabel, title)
-    if scene_run.model.dim == 3:          # contact pressure map of the last indentation
-        r = steps[-1][1]
+                o = np.argsort(coord[g.site[sel]])
+                curves[m].append((f"{d:g} mm", coord[g.site[sel]][o], tables["values"][m][j][sel][o], ".-"))
+    xlabel = KEY_LABELS[key] if sweep else xlabel
+    figures[f"{name}_receptors.png"] = indent_receptors_figure(curves, xlabel, _receptor_title(run, sweep, j, dim))
+    if scene_run.model.dim == 3:          # contact pressure map of the judged indentation
+        r = steps[j][1]
         figures[f"{name}_pressure.png"] = indent_pressure_figure(name, u, v, r.pressure_MPa, r.depth_mm.max())
     return figures
+
+
+def _receptor_title(run, sweep: bool, j: int, dim: int) -> str:
+    """The receptor figure's title: which indentation it shows, at what load."""
+    name, steps, exp = run.name, run.steps, run.experiment
+    r = steps[j][1]
+    load = f"force {r.total_force_N:.3g} {force_unit(dim)}" if exp.force_N is not None else f"depth {r.depth_mm.max():.3g} mm"
+    if sweep:
+        return f"{name}: receptors under the indentor's centre line at each offset ({load})"
+    when = f" at t = {exp.times_s[j]:.3g} s" if exp.times_s is not None else ""
+    reached = f", depth reached {r.depth_mm.max():.3g} mm" if exp.force_N is not None else ""
+    return f"{name}: receptors of indentation {j + 1} of {len(steps)}{when} ({load}{reached})"
 
 
 # --------------------------------------------------------------------------- afferents

@@ -35,6 +35,9 @@ HISTORY_KEEP = 30
 """Timings kept per kind and host (the most recent)."""
 REFRESH_S = 1.0
 """Seconds between refreshes of a task line."""
+BAR_DELAY_S = 0.5
+"""Seconds before a bar shows (unless told otherwise): a loop that ends, or is refused, sooner
+prints nothing, so an error found in its first half second is the only line."""
 
 def cache_root() -> Path:
     """The toolkit's cache folder: $FINGERTIP_CACHE_DIR, else ~/.cache/fingertip-fem."""
@@ -43,7 +46,7 @@ def cache_root() -> Path:
 
 class Silent:
     """Progress that reports nothing (the default of every science function)."""
-    def bar(self, iterable, total=None, desc="", unit="it", delay=0.0):
+    def bar(self, iterable, total=None, desc="", unit="it", delay=None):
         return iterable
 
     @contextlib.contextmanager
@@ -136,9 +139,11 @@ class Progress:
         self.history = TimingHistory() if history == "default" else history
         self._bars = []                              # open bars, innermost last
 
-    def bar(self, iterable, total=None, desc="", unit="it", delay=0.0):
+    def bar(self, iterable, total=None, desc="", unit="it", delay=None):
         """Iterate with a bar (total: the count when `iterable` has no length; delay: seconds before
-        the bar shows, so a loop that ends early, or fails on its first items, prints nothing)."""
+        the bar shows, default BAR_DELAY_S, so a loop that ends early, or fails on its first items,
+        prints nothing)."""
+        delay = BAR_DELAY_S if delay is None else delay
         if total is None and hasattr(iterable, "__len__"):
             total = len(iterable)
         bar = tqdm(iterable, total=total, desc=desc, unit=unit, file=self.stream, dynamic_ncols=True,

@@ -77,9 +77,10 @@ def write_markdown(path, columns: Mapping[str, object], title: str, float_format
 
 def read_numbers(path, columns: tuple[str, ...]) -> np.ndarray:
     """(n, len(columns)) floats from a CSV with those columns (header optional, any order if
-    given; '#' comment lines skipped). Empty or malformed -> InputError."""
+    given; '#' comment lines skipped; UTF-8, with or without the byte-order mark spreadsheet
+    programs write, e.g. Excel's "CSV UTF-8"). Empty or malformed -> InputError."""
     try:
-        with open(path, newline="") as fh:
+        with open(path, newline="", encoding="utf-8-sig") as fh:
             rows = [r for r in csv.reader(fh) if r and not r[0].lstrip().startswith("#")
                     and any(c.strip() for c in r)]
     except OSError as exc:

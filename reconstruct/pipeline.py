@@ -164,6 +164,9 @@ def _trim(s: np.ndarray, width: np.ndarray, rod: bool, tip_fraction: float, ds: 
         if rod_w < 0.5 * w_max:
             body = np.flatnonzero(width > 1.5 * rod_w)
             lo = body[0] + int(np.ceil(margin_px * sy / ds))
+            if lo >= len(s):
+                raise InputError("too little of the finger beyond the rod is seen whole in every view: zoom out "
+                                 "or re-centre it so that it is inside the image")
             trims["rod"] = f"{rod_w:.2f} mm wide, below s {s[lo]:.2f} mm"
     if lo == 0 and tip_fraction > 0:
         wide = np.flatnonzero(width >= tip_fraction * w_max)

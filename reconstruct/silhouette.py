@@ -138,6 +138,20 @@ def _crossings(img: np.ndarray, light: Lighting, edge: np.ndarray, rows: np.ndar
     return out
 
 
+SIDE_ROWS_MAX = 2 / 3
+"""Largest fraction of the object's rows on which it may touch the left or right image edge
+(those rows are trimmed; beyond it too little of the finger is seen whole)."""
+
+
+def _check_inside(mask: np.ndarray, frame: np.ndarray, rows: np.ndarray, name: str) -> None:
+    """InputError when the object leaves the image through its left or right edge on more than
+    SIDE_ROWS_MAX of its rows (the rows where it does are not seen whole)."""
+    if frame.sum() > SIDE_ROWS_MAX * len(rows):
+        side = "left" if mask[rows, 0].sum() >= mask[rows, -1].sum() else "right"
+        raise InputError(f"the finger touches the {side} image frame of {name} on {int(frame.sum())} of its "
+                         f"{len(rows)} rows: zoom out or re-centre it so that it is inside the image")
+
+
 def extract_borders(img: np.ndarray, name: str = "image") -> Borders:
     """Sub-pixel left/right borders on every row of a grey image (H, W) uint8."""
     mask, level = object_mask(img, name)
@@ -153,6 +167,7 @@ def extract_borders(img: np.ndarray, name: str = "image") -> Borders:
     right[rows] = _crossings(img, light, last, rows, +1)
     frame = np.zeros(h, bool)
     frame[rows] = (first == 0) | (last == w - 1)
+    _check_inside(mask, frame, rows, name)
     left[frame] = np.nan
     right[frame] = np.nan
     mid = h // 2

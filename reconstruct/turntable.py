@@ -111,6 +111,39 @@ def read_grey(path: Path) -> np.ndarray:
     return img
 
 
+def _images(folder: Path) -> list[Path]:
+    """The image files of a folder in name order; dotfiles (macOS `._view_000.png` resource forks,
+    `.DS_Store`, hidden files) are not images of the set."""
+    return sorted(p for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES and not p.name.startswith("."))
+
+
+def image_size(path: Path) -> tuple[int, int]:
+    """(W, H) of an image from its header; InputError for a file that is not a readable image or
+    ends before its image data does (a truncated copy), before any decoder reads its pixels."""
+    try:
+        with Image.open(path) as img:
+            size, kind = img.size, img.format
+    except (OSError, ValueError):
+        raise InputError(f"cannot read image '{path}': replace or remove the file") from None
+    if _truncated(path, kind):
+        raise InputError(f"image '{path}' is truncated (the file ends before its image data does): copy it "
+                         f"again from the camera, or remove it")
+    return size
+
+
+def _truncated(path: Path, kind: str | None) -> bool:
+    """Whether a JPEG lacks its end-of-image marker after its last scan, or a PNG its IEND chunk."""
+    if kind not in ("JPEG", "PNG"):
+        return False
+    try:
+        data = path.read_bytes()
+    except OSError:
+        return True
+    if kind == "PNG":
+        return b"IEND" not in data[-64:]
+    return data.rfind(b"\xff\xd9") < data.rfind(b"\xff\xda")
+
+
 def _read_manifest(folder: Path) -> dict:
     path = folder / "turntable.toml"
     if not path.exists():
@@ -129,9 +162,11 @@ def _read_manifest(folder: Path) -> dict:
 def load_turntable(folder) -> Turntable:
     """Validate a turntable folder and return it; every problem is an InputError naming the fix."""
     folder = Path(folder)
+    if folder.exists() and not folder.is_dir():
+        raise InputError(f"turntable folder '{folder}' is a file, not a folder: give the folder of the images")
     if not folder.is_dir():
         raise InputError(f"turntable folder '{folder}' does not exist: give the folder of the images")
-    files = sorted(p for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+    files = _images(folder)
     calib = [p for p in files if p.stem.lower() == "calibration"]
     views = [p for p in files if p.stem.lower() != "calibration"]
     if not views:
@@ -155,12 +190,7 @@ def load_turntable(folder) -> Turntable:
 
     sizes = {}
     for p in views + calib:                  # headers only: the pixels are decoded once, later
-        try:
-            with Image.open(p) as img:
-                size = img.size
-        except (OSError, ValueError):
-            raise InputError(f"cannot read image '{p}': replace or remove the file") from None
-        sizes.setdefault(size, []).append(p.name)
+        sizes.setdefault(image_size(p), []).append(p.name)
     if len(sizes) > 1:
         desc = "; ".join(f"{w}x{h}: {', '.join(n[:2])}{' ...' if len(n) > 2 else ''}"
                          for (w, h), n in sizes.items())
@@ -209,16 +239,12 @@ def _checkerboard(folder: Path, manifest: dict, size: tuple[int, int]):
     if min(corners) < 2 or not square > 0:
         raise InputError(f"turntable.toml: checkerboard_inner_corners must be at least [2, 2] and "
                          f"checkerboard_square_mm positive, not {list(corners)} and {square}")
-    photos = sorted(p for p in sub.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+    photos = _images(sub)
     if len(photos) < MIN_PHOTOS:
         raise InputError(f"only {len(photos)} photo(s) in '{sub}': take at least {MIN_PHOTOS} (about 10) of the "
                          f"board, tilted differently in each")
     for p in photos:
-        try:
-            with Image.open(p) as img:
-                other = img.size
-        except (OSError, ValueError):
-            raise InputError(f"cannot read image '{p}': replace or remove the file") from None
+        other = image_size(p)
         if other != size:
             raise InputError(f"checkerboard photo '{p.name}' is {other[0]}x{other[1]} px, the views "
                              f"{size[0]}x{size[1]}: take the board photos with the same camera settings")

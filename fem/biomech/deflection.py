@@ -30,14 +30,13 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from fem.contact.indentors import CYLINDERS_MM, make_indentor
-from fem.contact.linear import ContactModel
-from fem.geometry.layered import N_LAYERS
+from fem.contact.linear import MAX_DEPTH_MM, ContactModel, tissue_mm
 from fem.core.materials import FLUID_LAYER, Material
+from fem.geometry.layered import N_LAYERS
 from fem.io.modelfolder import CONTACT_REGION, factorise, folder_material, read_model
 from fem.verify.closed_forms import beam_deflection, waterbed_deflection
 from fingertip.errors import InputError
 from fingertip.progress import as_progress
-
 
 
 # --------------------------------------------------------------------------- codes and moduli
@@ -459,6 +458,17 @@ class CylinderSeries:
         return {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in self.__dict__.items()}
 
 
+def _check_series_force(exp, cm, code: str, force: float, limit: float, scale: float) -> None:
+    """Refuse, before the series starts, a force the narrowest cylinder does not reach at the
+    depth limit (the wider ones push more at a depth)."""
+    there = cm.force_at(exp.indentor_for(f"cylinder:{code}"), limit)
+    if there is not None and there[0] < force * (1 - 1e-6):
+        unit = "N/mm" if exp.dim == 2 else "N"
+        raise InputError(f"cylinder series: forces_N {scale * force:g} {unit} is not reached by {code} within "
+                         f"{limit:g} mm (the tissue over the bone, at most {MAX_DEPTH_MM:g} mm; the force there "
+                         f"is {scale * there[0]:.4g} {unit}): give smaller forces_N")
+
+
 def cylinder_series(exp: DeflectionExperiment, material, codes=None, forces_N=None, depths_mm=None) -> CylinderSeries:
     """Contact of the catalogue cylinders `codes` (default C1-C8, thesis table 5.1) placed as the
     experiment's indentor, at each force or each depth (one of the two), for a material (code or
@@ -472,13 +482,21 @@ def cylinder_series(exp: DeflectionExperiment, material, codes=None, forces_N=No
     kind, loads = ("force", forces_N) if forces_N is not None else ("depth", depths_mm)
     loads = np.asarray(loads, float).ravel()
     if not loads.size or np.any(loads <= 0):
-        raise InputError(f"cylinder series {kind}s must be positive, got {loads.tolist()}")
+        raise InputError(f"cylinder series {kind}s must be positive, got {', '.join(f'{v:g}' for v in loads)}")
+    tissue = tissue_mm(exp._model, exp.points_mm, exp.indentor.approach)
+    if kind == "depth" and loads.max() > tissue:
+        raise InputError(f"cylinder series: depths_mm {loads.max():g} mm is beyond the {tissue:g} mm of tissue over "
+                         f"the bone of this model; give depths_mm up to {tissue:g}")
+    limit = min(MAX_DEPTH_MM, tissue)
     cm, scale = exp.contact_model(as_log10(material, exp.n_layers))
+    if kind == "force":
+        _check_series_force(exp, cm, min(codes, key=CYLINDERS_MM.get), loads.max() / scale, limit, scale)
     out = np.zeros((4, len(loads), len(codes)))
     for k, code in enumerate(exp.progress.bar(codes, desc="cylinders", unit="cylinder")):
         ind = exp.indentor_for(f"cylinder:{code}")
         for j, v in enumerate(loads):
-            res = cm.indent(ind, force_N=v / scale) if kind == "force" else cm.indent(ind, depth_mm=v)
+            res = (cm.indent(ind, force_N=v / scale, max_depth_mm=limit) if kind == "force"
+                   else cm.indent(ind, depth_mm=v))
             out[:, j, k] = (res.depth_mm.max(), scale * res.total_force_N, res.contact_area_mm2,
                             scale * res.max_pressure_MPa)
     return CylinderSeries(codes, np.array([CYLINDERS_MM[c] for c in codes]), kind, loads, *out)

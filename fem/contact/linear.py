@@ -59,6 +59,7 @@ from fem.contact.compliance import (
     RowCache,
 )
 from fem.core.linalg import SERIAL_BLAS_BELOW, blas_threads
+from fem.core.materials import BONE_LAYER
 from fingertip.errors import InputError
 
 GAP_TOL_MM = 1e-8
@@ -66,6 +67,7 @@ GAP_TOL_MM = 1e-8
 FORCE_RTOL = 1e-6
 """Relative tolerance on prescribed forces."""
 MAX_DEPTH_MM = 5.0
+"""Depth limit of force control (mm) where the model's tissue is thicker (`tissue_mm`)."""
 
 
 # --------------------------------------------------------------------------- facets and pressure
@@ -113,6 +115,11 @@ def fe_facets(model, region: str, sn) -> tuple[np.ndarray, np.ndarray]:
     else:
         size = np.linalg.norm(x[:, 1] - x[:, 0], axis=0)
     return facets, facet_shares(facets, size, model.dim)
+
+
+def point_text(x, digits: int = 2) -> str:
+    """A point (dim,) in words for a message: "(0.5, -1.25, 3)" (rounded to `digits`)."""
+    return "(" + ", ".join(f"{v:g}" for v in np.round(np.asarray(x, float), digits) + 0.0) + ")"
 
 
 class BlockedError(InputError):
@@ -387,14 +394,14 @@ class ContactModel:
         sub = np.flatnonzero(np.isfinite(gap0))
         blocked = sub[comp.held[sub] & (gap0[sub] < -self.tol_mm)]
         if blocked.size:
-            x = np.round(self.points_mm[blocked[np.argmin(gap0[blocked])]], 2).tolist()
+            x = point_text(self.points_mm[blocked[np.argmin(gap0[blocked])]])
             raise BlockedError(f"indentor {indentor.name} would push {blocked.size} surface nodes that are held "
                                f"fixed (the deepest at {x} mm): it reaches the model's fixed boundary (nail or "
                                f"proximal cut); use a smaller depth or indentor, or move it away from there")
         sub = sub[~comp.held[sub]]
         far = sub[~comp.reach[sub]]
         if far.size and gap0[far].min() < -self.tol_mm:
-            x = np.round(self.points_mm[far[np.argmin(gap0[far])]], 2).tolist()
+            x = point_text(self.points_mm[far[np.argmin(gap0[far])]])
             raise InputError(f"indentor {indentor.name} reaches surface nodes (the deepest at {x} mm) outside "
                              f"the candidates condensed when the model was factorised: factorise with "
                              f"candidates covering this indentation (fem.contact.linear.reach)")
@@ -451,7 +458,7 @@ class ContactModel:
             try:
                 out.append(self.indent(moved, **load))
             except InputError as exc:
-                raise InputError(f"sweep position {np.round(off, 4).tolist()} mm: {exc}") from None
+                raise InputError(f"sweep position {point_text(off, 4)} mm: {exc}") from None
         return out
 
     def _finish(self, res, indentor) -> ContactResult:
@@ -478,7 +485,7 @@ class ContactModel:
                     r._deflection_mm[rows] = defl[rows, j]
                     r._gap_mm[rows] += defl[rows, j]
                     if r._gap_mm[rows].min() < -self.tol_mm:
-                        x = np.round(self.points_mm[rows[np.argmin(r._gap_mm[rows])]], 2).tolist()
+                        x = point_text(self.points_mm[rows[np.argmin(r._gap_mm[rows])]])
                         raise InputError(f"indentor {r.indentor_name}: the skin touched it at {x} mm, outside the "
                                          f"candidates condensed when the model was factorised: factorise with "
                                          f"a larger reach margin (fem.contact.linear.reach)")
@@ -513,9 +520,7 @@ class ContactModel:
                 res.kkt["force_iterations"] = it
                 return self._finish(res, indentor)
             if np.any((depth >= max_depth_mm) & (err < 0)):
-                raise InputError(f"force {target} N is not reached within {max_depth_mm} mm depth "
-                                 f"(force there {np.round(err + target, 6).tolist()} N): lower the force "
-                                 f"or raise the depth limit")
+                raise self._not_reached(target, max_depth_mm, err + target)
             lo = np.where(err < 0, np.maximum(lo, depth), lo)
             hi = np.where(err > 0, np.minimum(hi, depth), hi)
             J = self._force_jacobian(lcp, res.part[sub], n)
@@ -528,6 +533,27 @@ class ContactModel:
                 new = 0.5 * (lo + np.minimum(hi, 2 * depth))
             depth = np.minimum(np.clip(new, 0.5 * depth, 2 * depth), max_depth_mm)
         raise RuntimeError(f"force control did not converge for {indentor.name}")
+
+    def _not_reached(self, target, max_depth_mm, force) -> InputError:
+        unit = "N/mm" if self.points_mm.shape[1] == 2 else "N"
+        there = ", ".join(f"{f:.4g}" for f in np.atleast_1d(force))
+        return InputError(f"force_N {target:g} {unit} is not reached within max_depth_mm {max_depth_mm:g} mm "
+                          f"(the force there is {there} {unit}): lower force_N or raise max_depth_mm")
+
+    def force_at(self, indentor, depth_mm: float, equal_force=False) -> np.ndarray | None:
+        """(1,) total force, or (n_parts,) part forces (equal_force), at depth_mm beyond first
+        touch, e.g. the depth limit of force control, to refuse a force not reached there before a
+        loop of indentations; None when the indentor pushes held nodes there. What it leaves for
+        the next problem is forgotten (`restart`)."""
+        t0 = self.first_touch_mm(indentor)
+        travel = t0 + depth_mm if equal_force else np.full(indentor.n_parts, t0.min() + depth_mm)
+        try:
+            res = self.solve_travel(indentor, travel)[0]
+        except BlockedError:
+            return None
+        finally:
+            self.restart()
+        return res.part_force_N.copy() if equal_force else np.array([res.total_force_N])
 
     @staticmethod
     def _force_jacobian(lcp, part, n):
@@ -559,10 +585,25 @@ def reach(points_mm, indentor, offsets_mm, depth_mm: float, margin_mm: float = R
         try:
             s, t0 = first_touch(points_mm, indentor.shifted(off))
         except InputError as exc:
-            raise InputError(f"sweep position {np.round(off, 4).tolist()} mm: {exc}" if len(offsets_mm) > 1
+            raise InputError(f"sweep position {point_text(off, 4)} mm: {exc}" if len(offsets_mm) > 1
                              else str(exc)) from None
         mask |= np.any(s - t0 <= depth_mm + margin_mm, axis=1)
     return mask
+
+
+def tissue_mm(model, surface_mm, approach) -> float:
+    """The tissue an indentor can push into along `approach` (3,) on a `fem.core.model.Model`
+    (mm): from the highest of the contact-region points surface_mm (m, dim) against the approach
+    to the highest point of the bone (layer BONE_LAYER) along it, or, without bone, to the lowest
+    point of the model; rounded down to 0.01 mm, so that the limit a message shows may be given.
+    Depths beyond it would push the indentor through the bone or the body."""
+    up = -np.asarray(approach, float)[:model.dim]
+    up = up / np.linalg.norm(up)
+    top = float((np.asarray(surface_mm, float) @ up).max())
+    p, bone = model.mesh.p, model.layer == BONE_LAYER
+    below = (float((p[:, np.unique(model.mesh.t[:, bone])].T @ up).max()) if bone.any()
+             else float((p.T @ up).min()))
+    return float(np.floor((top - below) * 100 + 1e-6) / 100)
 
 
 def first_touch(points_mm, indentor) -> tuple[np.ndarray, np.ndarray]:
@@ -572,6 +613,6 @@ def first_touch(points_mm, indentor) -> tuple[np.ndarray, np.ndarray]:
     s = indentor.part_standoff(points_mm)
     t0 = s.min(axis=0)
     if not np.all(np.isfinite(t0)):
-        raise InputError(f"indentor {indentor.name} at {np.round(indentor.origin_mm, 3).tolist()} mm "
+        raise InputError(f"indentor {indentor.name} at {point_text(indentor.origin_mm, 3)} mm "
                          f"never touches the finger surface: move it over the pad or change the approach")
     return s, t0

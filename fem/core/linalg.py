@@ -23,6 +23,7 @@ import functools
 import logging
 import os
 import sys
+import threading
 
 import numpy as np
 import scipy.linalg as sla
@@ -78,6 +79,37 @@ millisecond on one thread, tenths of a second on two OpenBLAS threads of a loade
 def dense_threads(n: int):
     """`blas_threads` for dense work on an (n, n) matrix: one thread below SERIAL_BLAS_BELOW."""
     return blas_threads(1 if n < SERIAL_BLAS_BELOW else None)
+
+
+# --------------------------------------------------------------------------- interruptible calls
+WAIT_S = 0.1
+"""Seconds between checks for Ctrl-C while a long library call runs in its own thread."""
+
+
+def interruptible(call, *args):
+    """call(*args) in a daemon thread while this thread waits in WAIT_S joins, so that Ctrl-C
+    (KeyboardInterrupt, which Python delivers to the main thread between bytecodes) acts within
+    a fraction of a second during a long call that releases Python's lock (a PARDISO
+    factorisation, a dense LAPACK factorisation), instead of when it returns. The abandoned call
+    finishes (or is ended with the process) in its thread; its result is dropped. Off the main
+    thread, where no KeyboardInterrupt arrives, call runs here."""
+    if threading.current_thread() is not threading.main_thread():
+        return call(*args)
+    box = {}
+
+    def run():
+        try:
+            box["value"] = call(*args)
+        except BaseException as exc:  # noqa: BLE001 - handed to the waiting thread
+            box["error"] = exc
+
+    worker = threading.Thread(target=run, name=f"interruptible {getattr(call, '__name__', 'call')}", daemon=True)
+    worker.start()
+    while worker.is_alive():
+        worker.join(WAIT_S)
+    if "error" in box:
+        raise box["error"]
+    return box.get("value")
 
 
 # --------------------------------------------------------------------------- PARDISO
@@ -170,18 +202,28 @@ class Pardiso:
             # last digits depend on the thread count: a Dask task's run would differ from serial)
         self._live = True
         if not has_schur:
-            self._phase(12, np.zeros((self.n, 1), order="F"), np.zeros((self.n, 1), order="F"), 1)
+            self._long_phase(12, np.zeros((self.n, 1), order="F"), np.zeros((self.n, 1), order="F"), 1)
         else:
             ip[35] = 2                                      # Schur complement + partial factorisation
             self._perm = np.zeros(self.n, dtype=np.int32)
             self._perm[schur] = 1
             self._rows = np.asarray(schur)
             S = np.zeros((len(schur), len(schur)), order="F")     # symmetric: either order
-            self._phase(11, np.zeros(1), np.zeros(1), 1)
-            self._phase(22, np.zeros(1), S, 1)
+            self._long_phase(11, np.zeros(1), np.zeros(1), 1)
+            self._long_phase(22, np.zeros(1), S, 1)
             with dense_threads(len(S)):
-                self._schur_factor = sla.cho_factor(S, lower=True, overwrite_a=True)
+                self._schur_factor = interruptible(functools.partial(sla.cho_factor, S, lower=True, overwrite_a=True))
         self.nnz_factor = int(ip[17])
+
+    def _long_phase(self, phase, b, x, nrhs):
+        """A phase that takes long (analysis, factorisation) run `interruptible`: Ctrl-C acts at
+        once. An interrupted factorisation is abandoned: its memory is not released (the call still
+        runs in its thread; releasing under it would crash), the process ends soon after."""
+        try:
+            interruptible(self._phase, phase, b, x, nrhs)
+        except KeyboardInterrupt:
+            self._live = False
+            raise
 
     def _phase(self, phase, b, x, nrhs):
         err = ctypes.c_int32(0)
@@ -243,7 +285,7 @@ class Pardiso:
             raise ValueError("this factorisation has no Schur complement")
         if self._schur_inverse is None:
             with dense_threads(len(self._rows)):
-                c, info = sla.lapack.dpotri(self._schur_factor[0], lower=1)
+                c, info = interruptible(functools.partial(sla.lapack.dpotri, self._schur_factor[0], lower=1))
             if info:
                 raise np.linalg.LinAlgError(f"potri failed ({info})")
             for a in range(0, len(c), 1024):            # mirror the lower triangle, in blocks

@@ -14,15 +14,16 @@ through a given `fem.experiments.response.ResponseStore`.
 """
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from fem.contact.indentors import approach_direction, make_indentor
-from fem.contact.linear import ContactModel, reach
+from fem.contact.linear import MAX_DEPTH_MM, ContactModel, reach, tissue_mm
 from fem.experiments.response import ResponseStore, contact_model, stored_responses
-from fem.experiments.scene import AXES, Experiment, Receptors, Scene
+from fem.experiments.scene import AXES, Experiment, Receptors, Scene, line_text
 from fem.io.modelfolder import (
     CONDENSE_MAX_NODES,
     CONTACT_REGION,
@@ -49,6 +50,7 @@ class ExperimentRun:
     indentor: object
     steps: list = field(default_factory=list)
     seconds: float = 0.0
+    tissue_mm: float = float("inf")     # the tissue over the bone along its approach (`tissue_limit_mm`)
 
     @property
     def name(self) -> str:
@@ -124,7 +126,44 @@ def placement(exp: Experiment, model, info, sn) -> tuple[dict, str | None]:
 def deepest_mm(exp: Experiment) -> float:
     """Deepest travel beyond first touch an experiment may need (mm): its largest depth, or the
     depth limit of force control."""
-    return max(exp.depth_mm) if exp.force_N is None else exp.max_depth_mm
+    if exp.force_N is None:
+        return max(exp.depth_mm)
+    return MAX_DEPTH_MM if exp.max_depth_mm is None else exp.max_depth_mm
+
+
+def tissue_limit_mm(model, sn, approach) -> float:
+    """`fem.contact.linear.tissue_mm` of the contact region `sn` along `approach` (mm)."""
+    return tissue_mm(model, sn.x, approach)
+
+
+def within_tissue(exp: Experiment, limit_mm: float) -> Experiment:
+    """The experiment with the depth limit of force control it runs with: max_depth_mm, else the
+    tissue over the bone (limit_mm) capped at MAX_DEPTH_MM. InputError for a depth, or a given
+    max_depth_mm, beyond the tissue (limit_mm)."""
+    where = f"experiment '{exp.name}'"
+    beyond = f"is beyond the {limit_mm:g} mm of tissue over the bone of this model"
+    if exp.force_N is None:
+        deepest = max(exp.depth_mm)
+        if deepest > limit_mm:
+            raise InputError(f"{where}: depth_mm {deepest:g} mm {beyond}; give depth_mm up to {limit_mm:g}")
+        return exp
+    if exp.max_depth_mm is None:
+        return dataclasses.replace(exp, max_depth_mm=min(MAX_DEPTH_MM, limit_mm))
+    if exp.max_depth_mm > limit_mm:
+        raise InputError(f"{where}: max_depth_mm {exp.max_depth_mm:g} mm {beyond}; give max_depth_mm up to "
+                         f"{limit_mm:g}")
+    return exp
+
+
+def check_receptor_depths(model, info, sn, depths_mm) -> None:
+    """InputError for receptor depths at or beyond the tissue over the bone (along the model's
+    support; -y in 2D), where receptor points would lie in the bone or outside the model."""
+    a = approach_down(info) if model.dim == 3 else np.array([0.0, -1.0, 0.0])
+    limit = tissue_limit_mm(model, sn, a)
+    deepest = max(depths_mm, default=0.0)
+    if deepest >= limit:
+        raise InputError(f"receptor depths_mm {deepest:g} mm is not inside the {limit:g} mm of tissue over the "
+                         f"bone of this model; give depths_mm below {limit:g}")
 
 
 def receptor_line(line, sn, dim) -> tuple[int, float] | None:
@@ -133,7 +172,7 @@ def receptor_line(line, sn, dim) -> tuple[int, float] | None:
         return None
     axis = AXES[str(line[0])]
     if axis >= dim:
-        raise InputError(f"bad receptor line {list(line)}: use z=<mm> or z=middle (3D), x=<mm>")
+        raise InputError(f"bad receptor line {line_text(line)}: use z=<mm> or z=middle (3D), x=<mm>")
     value = 0.5 * (sn.x[:, axis].min() + sn.x[:, axis].max()) if line[1] == "middle" else float(line[1])
     return axis, value
 
@@ -163,6 +202,7 @@ def run_experiments(model, info, scene: Scene, progress=None, store=None, only: 
         cm, system = contact_model(model, sn, responses), None
     todo = [(run, off, load) for k, run in enumerate(runs) if only is None or k == only
             for off, load in run.experiment.indentations]
+    _check_forces(cm, runs if only is None else [runs[only]])
     solved = {}                       # a trace repeats indentations (a hold): each is solved once
     for i, (run, off, load) in enumerate(progress.bar(todo, desc="indentations", unit="indentation")):
         t0 = time.perf_counter()
@@ -183,6 +223,7 @@ def _plan(model, info, scene: Scene):
     """(contact region's SurfaceNodes, [ExperimentRun without steps], placement warnings,
     (P,) bool candidates the scene can reach, receptor line, receptor grid) of a scene."""
     scene.check_dim(model.dim)
+    scene.check_count()
     sn = model.surface_nodes(CONTACT_REGION[model.dim])
     runs, warnings, touched = [], [], np.zeros(len(sn.nodes), bool)
     for exp in scene.experiments:
@@ -190,9 +231,12 @@ def _plan(model, info, scene: Scene):
         if warning:
             warnings.append(warning)
         ind = make_indentor(exp.indentor, **place)
+        tissue = tissue_limit_mm(model, sn, ind.approach)
+        exp = within_tissue(exp, tissue)
         touched |= reach(sn.x, ind, exp.offsets_mm, deepest_mm(exp))
-        runs.append(ExperimentRun(exp, place, ind))
+        runs.append(ExperimentRun(exp, place, ind, tissue_mm=tissue))
     rc = scene.receptors
+    check_receptor_depths(model, info, sn, rc.depths_mm)
     line = receptor_line(rc.line, sn, model.dim)
     grid = receptor_grid(*receptor_surface(model, sn), np.asarray(rc.depths_mm, float), rc.spacing_mm, line)
     return sn, runs, warnings, touched, line, grid
@@ -220,6 +264,27 @@ def assemble_run(model, info, scene: Scene, runs: list, progress=None) -> SceneR
         sampler = ReceptorSampler(model, grid)
     return SceneRun(model, info, scene, None, sn, grid, sampler, list(scene.receptors.measures), line, list(runs),
                     warnings)
+
+
+def _check_forces(cm: ContactModel, runs) -> None:
+    """Refuse a force that is not reached at its depth limit before the indentations start: the
+    full force at the first position of each force-controlled experiment."""
+    for run in runs:
+        exp = run.experiment
+        if exp.force_N is None:
+            continue
+        force = cm.force_at(run.indentor.shifted(exp.offsets_mm[0]), exp.max_depth_mm, exp.equal_force)
+        if force is None or np.all(force >= exp.force_N * (1 - 1e-6)):
+            continue
+        unit = "N/mm" if cm.points_mm.shape[1] == 2 else "N"
+        there = f"the force there is {', '.join(f'{f:.4g}' for f in force)} {unit}"
+        if exp.max_depth_mm >= run.tissue_mm:
+            raise InputError(f"experiment '{exp.name}': force_N {exp.force_N:g} {unit} is not reached within the "
+                             f"{run.tissue_mm:g} mm of tissue over the bone of this model ({there}): give a "
+                             f"smaller force_N")
+        raise InputError(f"experiment '{exp.name}': force_N {exp.force_N:g} {unit} is not reached within "
+                         f"max_depth_mm {exp.max_depth_mm:g} mm ({there}): lower force_N or raise max_depth_mm "
+                         f"(up to the {run.tissue_mm:g} mm of tissue over the bone)")
 
 
 def _indent_one(cm: ContactModel, run: ExperimentRun, off, load):
@@ -327,6 +392,7 @@ def prepare_responses(model_dir, material=None, nu=None, approach=None, receptor
         raise InputError(f"the contact region has {len(sn.nodes)} candidates, more than the "
                          f"{CONDENSE_MAX_NODES} a response model condenses: run `pipeline.py indent` with "
                          f"your scene and --no-pvd, which stores one for the candidates it can touch")
+    check_receptor_depths(model, info, sn, receptors.depths_mm)
     grid = receptor_grid(*receptor_surface(model, sn), np.asarray(receptors.depths_mm, float), receptors.spacing_mm,
                          receptor_line(receptors.line, sn, model.dim))
     store = ResponseStore(model_dir)

@@ -36,6 +36,7 @@ from __future__ import annotations
 import dataclasses
 import tomllib
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -48,26 +49,65 @@ from fem.receptors.grid import DEFAULT_DEPTHS_MM, DEFAULT_MEASURES
 from fem.receptors.transduction import class_data
 from fingertip.declare import declared, finite, nonnegative, positive
 from fingertip.errors import InputError
+from fingertip.resources import scene_names, shipped_scene
 
 AXES = {"x": 0, "y": 1, "z": 2}
 
 
 # --------------------------------------------------------------------------- value lists
+MAX_VALUES = 100_000
+"""Most values a value list ('a:b:step' or 'v1,v2,...') may hold."""
+MAX_INDENTATIONS = 10_000
+"""Default bound on the indentations of one scene (`Scene.max_indentations`)."""
+MAX_RECEPTOR_DEPTHS = 100
+"""Most receptor depths a grid may have (each multiplies the receptor points)."""
+
+
+def _list_error(text, why: str) -> InputError:
+    return InputError(f"bad value list '{text}': {why}")
+
+
 def parse_values(text) -> np.ndarray:
-    """'a:b:step' (inclusive), 'v1,v2,...', a number or a list -> (n,) floats."""
+    """'a:b:step' (inclusive), 'v1,v2,...', a number or a list -> (n,) finite floats; InputError
+    for other words, non-finite numbers or more than MAX_VALUES values."""
     if isinstance(text, (int, float)):
-        return np.array([float(text)])
-    if isinstance(text, (list, tuple)):
-        return np.asarray(text, float)
+        values = np.array([float(text)])
+    elif isinstance(text, (list, tuple)):
+        if len(text) > MAX_VALUES:
+            raise _list_error(f"[{len(text)} values]", f"more than the {MAX_VALUES} values a list may hold")
+        values = np.asarray(text, float).ravel()
+    else:
+        values = _parse_words(str(text))
+    if not np.all(np.isfinite(values)):
+        raise _list_error(text, "every value must be a finite number (no nan or inf)")
+    return values
+
+
+def _parse_words(text: str) -> np.ndarray:
+    """The values of a value list in words (`parse_values`)."""
+    usage = "use start:stop:step (e.g. 0.5:3:0.5) or v1,v2,..."
     try:
         if ":" in text:
             a, b, step = (float(t) for t in text.split(":"))
+            if not all(np.isfinite((a, b, step))):
+                raise _list_error(text, "start, stop and step must be finite numbers (no nan or inf)")
             if not step > 0 or b < a:
                 raise ValueError
-            return a + step * np.arange(int(np.floor((b - a) / step + 1e-9)) + 1)
-        return np.array([float(t) for t in text.split(",")])
-    except ValueError:
-        raise InputError(f"bad value list '{text}': use start:stop:step (e.g. 0.5:3:0.5) or v1,v2,...") from None
+            with np.errstate(over="ignore", invalid="ignore"):
+                count = np.floor((b - a) / step + 1e-9) + 1
+            if not count <= MAX_VALUES:
+                shown = f"{count:.0f}" if np.isfinite(count) else "too many"
+                raise _list_error(text, f"{shown} values, more than the {MAX_VALUES} a list may hold: "
+                                        f"use a larger step or a shorter range")
+            return a + step * np.arange(int(count))
+        words = text.split(",")
+        if len(words) > MAX_VALUES:
+            raise _list_error(text[:40] + "...", f"more than the {MAX_VALUES} values a list may hold")
+        return np.array([float(t) for t in words])
+    except ValueError as exc:
+        if isinstance(exc, InputError):
+            raise
+        raise _list_error(text, usage) from None
 
 
 def parse_sweep(text) -> tuple[int, np.ndarray]:
@@ -120,6 +160,17 @@ def _material(value, key, where):
             and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)):
         return tuple(float(v) for v in value)
     raise _bad(key, where, 'a material code ("m43338") or moduli per layer in MPa ([0.01, 0.001, ...])', value)
+
+
+def _whole(word: str, name: str) -> int:
+    """A whole number >= 1 from a command-line word (ValueError otherwise)."""
+    try:
+        value = int(word)
+    except ValueError:
+        raise ValueError(f"must be a whole number >= 1, got {word}") from None
+    if value < 1:
+        raise ValueError(f"must be a whole number >= 1, got {word}")
+    return value
 
 
 def _count(value, key, where):
@@ -177,6 +228,13 @@ def _vector3(value, key, where):
     return tuple(float(v) for v in value)
 
 
+def line_text(value) -> str:
+    """A receptor line [axis, value] in words, as the command line writes it ("z=middle")."""
+    if isinstance(value, (list, tuple)) and len(value) == 2:
+        return f"{value[0]}={value[1]}"
+    return repr(value)
+
+
 def _line(value, key, where):
     """[axis, value]: axis x, y or z and a number in mm or "middle" (kept as given)."""
     ok = isinstance(value, (list, tuple)) and len(value) == 2 and str(value[0]) in AXES
@@ -186,7 +244,7 @@ def _line(value, key, where):
         except (TypeError, ValueError):
             ok = False
     if not ok:
-        raise InputError(f"bad receptor line {list(value) if isinstance(value, tuple) else value}: "
+        raise InputError(f"bad receptor line {line_text(value)}: "
                          f"use z=<mm> or z=middle (3D), x=<mm>")
     return tuple(value)
 
@@ -205,8 +263,8 @@ def _finite(values, key, where, low=None, strict=False):
         bad |= (v <= low) if strict else (v < low)
     if not len(v) or bad.any():
         want = "finite" + ("" if low is None else f" and {'>' if strict else '>='} {low:g}")
-        shown = values[0] if isinstance(values, tuple) and len(values) == 1 else values
-        raise InputError(f"{where} {key} must be {want}, got {shown!r}")
+        shown = ", ".join(f"{x:g}" for x in v[bad][:5]) if len(v) else "no value"
+        raise InputError(f"{where} {key} must be {want}, got {shown}")
 
 
 def _key(unit: str, parse, default=None, doc: str = "", toml: str | None = None, **cli):
@@ -254,6 +312,9 @@ class Receptors:
         kw = _parse_table(cls, table, "[receptors]")
         if "depths_mm" in kw:
             _finite(kw["depths_mm"], "depths_mm", "[receptors]", 0.0)
+            if len(kw["depths_mm"]) > MAX_RECEPTOR_DEPTHS:
+                raise InputError(f"[receptors] depths_mm: {len(kw['depths_mm'])} depths, more than the "
+                                 f"{MAX_RECEPTOR_DEPTHS} a receptor grid may have: use a larger step")
         if "spacing_mm" in kw:
             _finite(kw["spacing_mm"], "spacing_mm", "[receptors]", 0.0, strict=True)
         if "measures" in kw:
@@ -351,7 +412,8 @@ class Experiment:
     force_N: float | None = _key("N", _number, None, "total force (N/mm in 2D); the depth is solved for",
                                  text=positive)
     equal_force: bool = _key("", _boolean, False, "with a force: every part of a two-point indentor carries it")
-    max_depth_mm: float = _key("mm", _number, MAX_DEPTH_MM, "depth limit of force control", text=positive)
+    max_depth_mm: float | None = _key("mm", _number, None, "depth limit of force control", text=positive,
+                                      default_text=f"the tissue over the bone, at most {MAX_DEPTH_MM:g}")
     sweep: tuple | None = _key("mm", _sweep, None, "move the indentor: x=start:stop:step or z=start:stop:step",
                                text=str)
     trace: Trace | None = _key("", None, None, "[experiment.trace]: time course of the depth or force")  # noqa: RUF009
@@ -376,7 +438,7 @@ class Experiment:
             kw["trace"] = Trace.from_dict(table["trace"], where)
             if len(kw.get("depth_mm") or (0,)) != 1:
                 raise InputError(f"{where}: a traced experiment takes one depth_mm (its full depth), "
-                                 f"got {list(kw['depth_mm'])}")
+                                 f"got {', '.join(f'{d:g}' for d in kw['depth_mm'])}")
             if (kw["trace"].shape == "scan") != ("sweep" in kw):
                 raise InputError(f'{where}: a "scan" trace needs a sweep, and a sweep with a trace '
                                  f'needs shape = "scan"')
@@ -396,7 +458,8 @@ class Experiment:
         """Keyword arguments of ContactModel.indent, one dict per indentation at each position."""
         if self.force_N is None:
             return [{"depth_mm": d} for d in self.depth_mm]
-        return [{"force_N": self.force_N, "equal_force": self.equal_force, "max_depth_mm": self.max_depth_mm}]
+        limit = MAX_DEPTH_MM if self.max_depth_mm is None else self.max_depth_mm
+        return [{"force_N": self.force_N, "equal_force": self.equal_force, "max_depth_mm": limit}]
 
     @property
     def indentations(self) -> list[tuple[np.ndarray, dict]]:
@@ -448,11 +511,18 @@ class Scene:
     receptors: Receptors = _key("", lambda v, key, where: Receptors.from_dict(v), Receptors, "[receptors]")  # noqa: RUF009
     output: Output = _key("", lambda v, key, where: Output.from_dict(v), Output, "[output]")  # noqa: RUF009
     afferents: Afferents | None = _key("", lambda v, key, where: Afferents.from_dict(v), None, "[afferents]")  # noqa: RUF009
+    max_indentations: int = _key("", _count, MAX_INDENTATIONS, "most indentations the scene may run (all its "
+                                 "experiments together)", text=lambda word: _whole(word, "max_indentations"))
 
     @classmethod
-    def from_dict(cls, d, source: str = "scene") -> Scene:
-        """A scene from its TOML tables; source names it in the error of a missing experiment."""
+    def from_dict(cls, d, source: str = "scene", max_indentations: int | None = None) -> Scene:
+        """A scene from its TOML tables; source names it in the error of a missing experiment;
+        max_indentations: the bound on its indentations, instead of the scene's own (a flag)."""
         kw = _parse_table(cls, d, "scene", experiment=None)
+        if max_indentations is not None:
+            kw["max_indentations"] = max_indentations
+        if kw.get("max_indentations", 1) < 1:
+            raise InputError(f"{source} max_indentations must be a whole number >= 1, got {kw['max_indentations']}")
         tables = d.get("experiment")
         if not tables:
             raise InputError(f"{source} has no [[experiment]] table")
@@ -464,7 +534,22 @@ class Scene:
         if kw.get("afferents") is not None and not any(e.trace is not None for e in experiments):
             raise InputError(f"{source}: [afferents] spike over time; give an experiment a time course "
                              f"([experiment.trace], e.g. shape = \"ramp_hold\")")
-        return cls(experiments=experiments, **kw)
+        scene = cls(experiments=experiments, **kw)
+        scene.check_count()
+        return scene
+
+    @property
+    def indentations(self) -> int:
+        """Indentations the scene runs, all experiments together."""
+        return sum(len(e.indentations) for e in self.experiments)
+
+    def check_count(self) -> None:
+        """Raise InputError when the scene runs more than max_indentations indentations."""
+        n = self.indentations
+        if n > self.max_indentations:
+            raise InputError(f"the scene asks for {n} indentations, more than max_indentations "
+                             f"{self.max_indentations}: use fewer depths or sweep positions (a larger step), "
+                             f"or raise max_indentations")
 
     def check_dim(self, dim: int) -> None:
         """Raise InputError if an experiment cannot run on a model of `dim` (`Experiment.check_dim`)."""
@@ -475,11 +560,16 @@ class Scene:
                              "reconstruction in 3D); a 2D section has no pad area")
 
 
-def load_scene(path) -> Scene:
-    """Read a TOML scene file (`Scene.from_dict`)."""
+def load_scene(path, max_indentations: int | None = None) -> Scene:
+    """Read a TOML scene file (`Scene.from_dict`; max_indentations: the bound instead of the
+    file's own); a bare name that is no file, such as "ramp_hold", is the shipped scene of that
+    name (`fingertip.resources`)."""
+    if not Path(path).exists() and (found := shipped_scene(str(path))) is not None:
+        path = found
     try:
         with open(path, "rb") as fh:
             d = tomllib.load(fh)
     except (OSError, ValueError) as exc:             # TOMLDecodeError, UnicodeDecodeError are ValueErrors
-        raise InputError(f"cannot read scene '{path}': {' '.join(str(exc).split())}") from None
-    return Scene.from_dict(d, f"scene '{path}'")
+        raise InputError(f"cannot read scene '{path}': {' '.join(str(exc).split())} (the shipped scenes are "
+                         f"{', '.join(scene_names())})") from None
+    return Scene.from_dict(d, f"scene '{path}'", max_indentations)

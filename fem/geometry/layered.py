@@ -28,7 +28,13 @@ import numpy as np
 
 from fem.core.materials import DEFAULT_NU, LAYERED_CODE
 from fem.geometry.presets import FINGERTIP_PRESETS
-from fem.geometry.sections import body_z_range, check_polygon, load_sections, preset_sections, tip_length
+from fem.geometry.sections import (
+    body_z_range,
+    check_polygon,
+    load_sections,
+    preset_sections,
+    tip_length,
+)
 from fingertip.declare import declared, finite, nonnegative, positive
 from fingertip.errors import InputError
 
@@ -52,7 +58,9 @@ def check_positive(obj, *names: str) -> None:
     """Raise InputError unless every named attribute of obj is > 0."""
     for name in names:
         if not getattr(obj, name) > 0:
-            raise InputError(f"{name} must be > 0 (got {getattr(obj, name)})")
+            value = getattr(obj, name)
+            raise InputError(f"{name} must be > 0, got {value:g}" if isinstance(value, (int, float))
+                             else f"{name} must be > 0, got {value!r}")
 
 
 def parse_profile(text: str | None):

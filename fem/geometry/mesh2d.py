@@ -42,8 +42,7 @@ class Sizing2D:
     fine_depth_mm: float = declared(1.0, "mm", "depth of the fine zone below the volar (3D) or top (2D) surface", text=positive)
 
     def check(self) -> None:
-
-        check_sizes(self, 0.01)
+        check_sizes(self, 0.01, "2D")
 
 
 @dataclass

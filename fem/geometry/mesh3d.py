@@ -15,17 +15,17 @@ from __future__ import annotations
 
 import hashlib
 import json
-from importlib import metadata
 import time
 from dataclasses import asdict, dataclass
+from importlib import metadata
 from pathlib import Path
 
 import igl
 import meshio
 import numpy as np
 
-from fem.geometry.tetwild import fixed_seed_library, run_tetwild
 from fem.geometry.layered import N_LAYERS, LayeredModel, check_positive
+from fem.geometry.tetwild import fixed_seed_library, run_tetwild
 from fingertip.declare import declared, positive
 from fingertip.errors import InputError
 from fingertip.progress import as_progress, cache_root
@@ -63,13 +63,18 @@ class Sizing:
             raise InputError(f"opt_iter must be >= 1; got {self.opt_iter}")
 
 
-def check_sizes(sizing, min_size_mm: float) -> None:
-    """Raise InputError unless the sizing's lengths are positive and min_size_mm <= size <= coarse."""
+def check_sizes(sizing, min_size_mm: float, kind: str = "3D") -> None:
+    """Raise InputError unless the sizing's lengths are positive and min_size_mm <= size <= coarse;
+    kind ("3D", "2D") names the models whose default a message compares with."""
     check_positive(sizing, "size_mm", "coarse_mm", "growth", "fine_depth_mm")
     if sizing.size_mm < min_size_mm:
-        raise InputError(f"size_mm {sizing.size_mm} is below {min_size_mm} mm: too many elements for this machine")
+        raise InputError(f"size_mm {sizing.size_mm:g} mm is below {min_size_mm:g} mm, too many elements for this "
+                         f"machine: give size_mm of at least {min_size_mm:g}")
     if sizing.coarse_mm < sizing.size_mm:
-        raise InputError(f"coarse_mm ({sizing.coarse_mm}) must be >= size_mm ({sizing.size_mm})")
+        default = sizing.coarse_mm == type(sizing)().coarse_mm
+        raise InputError(f"size_mm {sizing.size_mm:g} mm is larger than coarse_mm {sizing.coarse_mm:g} mm"
+                         + (f" (the default of {kind} models)" if default else "")
+                         + "; give coarse_mm at least as large as size_mm")
 
 
 @dataclass

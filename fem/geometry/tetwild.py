@@ -109,7 +109,7 @@ def run_tetwild(kwargs: dict) -> tuple[np.ndarray, np.ndarray]:
 
 def _work(folder: Path) -> None:
     """The worker: the inputs of `run_tetwild` from folder, pytetwild's output into folder/out.npz."""
-    import pytetwild   # 0.17 s of import, in the worker only
+    import pytetwild  # 0.17 s of import, in the worker only
 
     with np.load(folder / "in.npz") as arrays:
         kwargs = {**{k: arrays[k] for k in arrays.files}, **json.loads((folder / "in.json").read_text())}

@@ -51,7 +51,12 @@ def read_model(model_dir, material=None, nu=None):
 def folder_info(model_dir) -> dict:
     """model.json of a model folder ({} if it has none); InputError without mesh.vtu or for an
     unreadable model.json."""
+    if not str(model_dir).strip():
+        raise InputError("the model folder is empty: give the folder `pipeline.py mesh` wrote (mesh.vtu + model.json)")
     folder = Path(model_dir)
+    if folder.exists() and not folder.is_dir():
+        raise InputError(f"model folder '{model_dir}' is a file: give the folder `pipeline.py mesh` wrote "
+                         f"(mesh.vtu + model.json)")
     if not (folder / "mesh.vtu").is_file():
         raise InputError(f"no mesh.vtu in '{model_dir}': run `pipeline.py mesh` first or give a model folder")
     if not (folder / "model.json").is_file():

@@ -261,6 +261,9 @@ class IndentRun:
     position). `diameter_mm` (2D cylinders) and each stimulus's sweep axis come from run.json."""
     def __init__(self, folder, diameter_mm: float | None = None):
         self.folder = Path(folder)
+        if self.folder.exists() and not self.folder.is_dir():
+            raise InputError(f"'{folder}' is a file, not an indentation results folder: give the folder "
+                             f"`pipeline.py indent` wrote")
         if not self.folder.is_dir():
             raise InputError(f"no indentation results folder '{folder}': run `pipeline.py indent` first")
         self.stimuli = sorted(p.name[:-len("_receptors.csv")] for p in self.folder.glob("*_receptors.csv")

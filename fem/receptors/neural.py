@@ -102,10 +102,11 @@ RATE_ALIASES = ("rate_ips", "rate_imp_s")
 
 # --------------------------------------------------------------------------- neural recordings
 def read_neural_csv(path) -> NeuralData:
-    """Read and validate the neural-data CSV (format in the module docstring)."""
+    """Read and validate the neural-data CSV (format in the module docstring; UTF-8, with or
+    without the byte-order mark of Excel's "CSV UTF-8")."""
     path = Path(path)
     try:
-        text = path.read_text()
+        text = path.read_text(encoding="utf-8-sig")
     except UnicodeDecodeError as exc:
         raise InputError(f"neural data '{path}' is not a text CSV file ({exc})") from None
     except OSError as exc:

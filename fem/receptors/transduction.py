@@ -29,17 +29,18 @@ import json
 import math
 from dataclasses import dataclass
 from functools import lru_cache
-from pathlib import Path
 
 import numpy as np
 
 from fingertip.errors import InputError
+from fingertip.resources import shipped
 
 LIF_RATE_HZ = 5000.0
 CLASSES = ("SA1", "RA", "PC")
 N_PARAMETERS = 13
 REFRACTORY_SAMPLES = 5          # a spike needs more than 5 samples since the last one
-DATA_FILE = Path(__file__).resolve().parents[2] / "data" / "touchsim_afferents.json"
+DATA_FILE = "data/touchsim_afferents.json"
+"""The published parameters, a shipped file (`fingertip.resources.shipped`)."""
 
 
 @dataclass(frozen=True)
@@ -53,10 +54,11 @@ class ClassData:
 
 @lru_cache(maxsize=1)
 def _tables() -> dict:
+    path = shipped(DATA_FILE)
     try:
-        raw = json.loads(DATA_FILE.read_text())
+        raw = json.loads(path.read_text())
     except OSError as e:
-        raise InputError(f"cannot read the TouchSim afferent tables {DATA_FILE}: {e.strerror}") from None
+        raise InputError(f"cannot read the TouchSim afferent tables {path}: {e.strerror}") from None
     basis = np.array(raw["post_spike_basis"], float)
     basis.setflags(write=False)
     classes = {}
@@ -64,7 +66,7 @@ def _tables() -> dict:
         c = raw["classes"][name]
         p = np.array(c["parameters"], float)
         if p.ndim != 2 or p.shape[1] != N_PARAMETERS:
-            raise InputError(f"{DATA_FILE}: class {name} parameters must be rows of {N_PARAMETERS} numbers")
+            raise InputError(f"{path}: class {name} parameters must be rows of {N_PARAMETERS} numbers")
         p.setflags(write=False)
         classes[name] = ClassData(name, float(c["depth_mm"]), float(c["density_per_cm2"]), p)
     skin = raw["skin"]

@@ -14,12 +14,13 @@ from __future__ import annotations
 import importlib
 import logging
 import os
+import re
 import signal
 import sys
 import traceback
 from pathlib import Path
 
-from fingertip.cli.options import Parser
+from fingertip.cli.options import UNSET, Parser
 from fingertip.errors import InputError
 
 COMMANDS = {
@@ -64,11 +65,37 @@ def build_parser(prog: str = "pipeline.py", command: str | None = None) -> Parse
     their help only (None: all of them; every one with "all")."""
     parser = Parser(prog=prog, description=DESCRIPTION)
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
+    parser.commands = {}
     for name, (module, add, help_text) in COMMANDS.items():
-        p = sub.add_parser(name, help=help_text)
+        p = parser.commands[name] = sub.add_parser(name, help=help_text)
         if command in (name, "all"):
             getattr(importlib.import_module(f"fingertip.cli.{module}"), add)(p)
     return parser
+
+
+def flag_table(parser, args=None) -> dict[str, str]:
+    """{field name: flag} of a subcommand's parser: the parameter names (argparse dests with an
+    underscore, e.g. size_mm) whose values its flags give (--size). With args (the parsed
+    namespace), a field the command reads from its --scene file (`from_scene`) counts only when
+    its flag was given."""
+    from_scene = set(getattr(args, "from_scene", ())) if getattr(args, "scene", None) else set()
+    table = {}
+    for action in parser._actions:
+        if not action.option_strings or "_" not in action.dest:
+            continue
+        if action.dest in from_scene and getattr(args, action.dest, UNSET) is UNSET:
+            continue
+        table[action.dest] = next((o for o in action.option_strings if o.startswith("--")), action.option_strings[0])
+    return table
+
+
+def user_words(message: str, table: dict[str, str]) -> str:
+    """A message in the command line's words: each parameter name of `table` (a whole word, e.g.
+    size_mm, not fine_size_mm) replaced by its flag (--size)."""
+    if not table:
+        return message
+    names = "|".join(re.escape(n) for n in sorted(table, key=len, reverse=True))
+    return re.sub(rf"(?<![\w-])({names})(?!\w)", lambda m: table[m.group(1)], message)
 
 
 class Terminated(KeyboardInterrupt):
@@ -90,6 +117,16 @@ class _WarningLines(logging.Handler):
         print(f"warning: {_one_line(record.getMessage())}", file=sys.stderr, flush=True)
 
 
+def _kept(args) -> str:
+    """What an interrupted command keeps: its `kept(args)` (a subcommand that keeps finished
+    parts says which, e.g. `reproduce` its claims), else that nothing was written."""
+    try:
+        text = args.kept(args) if args is not None and getattr(args, "kept", None) else None
+    except Exception:  # noqa: BLE001 - the message of an interrupt must not fail
+        text = None
+    return text or "nothing was written"
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run one command (argv: its words, default sys.argv[1:]); returns the exit code: 0 done,
     2 bad input (one `error:` line), 130 Ctrl-C, 143 SIGTERM, 1 an internal error (a bug)."""
@@ -102,16 +139,19 @@ def main(argv: list[str] | None = None) -> int:
     loggers = [logging.getLogger(name) for name in LOGGERS]
     for logger in loggers:
         logger.addHandler(handler)
+    parser = args = command = None
     try:
         words = sys.argv[1:] if argv is None else [str(w) for w in argv]
         command = words[0] if words and words[0] in COMMANDS else None
-        args = build_parser("fingertip" if installed else "pipeline.py", command).parse_args(words)
+        parser = build_parser("fingertip" if installed else "pipeline.py", command)
+        args = parser.parse_args(words)
         args.run(args)
     except InputError as exc:
-        print(f"error: {_one_line(exc)}", file=sys.stderr)
+        table = flag_table(parser.commands[command], args) if command is not None and parser is not None else {}
+        print(f"error: {_one_line(user_words(str(exc), table))}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:
-        print("error: interrupted; nothing was written", file=sys.stderr)
+        print(f"error: interrupted; {_kept(args)}", file=sys.stderr)
         return 143 if isinstance(exc, Terminated) else 130
     except Exception as exc:  # noqa: BLE001 - the last resort: one line, not a traceback
         if os.environ.get(DEBUG_ENV):

@@ -57,6 +57,11 @@ def _given(value):
     return None if value is UNSET else value
 
 
+def _out(out, default) -> str:
+    """--out as given (an empty word is refused by the job), else the default folder."""
+    return str(default) if out is None else out
+
+
 def _common(p, indentor_help):
     p.add_argument("model", help="model folder with mesh.vtu (+ model.json) from `pipeline.py mesh`")
     p.add_argument("--indentor", default="wedge", help=indentor_help)
@@ -87,7 +92,7 @@ def add_study_layers(p):
 
 
 def _run_study_layers(args):
-    text = run_study_layers(args.model, args.out or str(Path(args.model) / "study_layers"), base=args.base,
+    text = run_study_layers(args.model, _out(args.out, Path(args.model) / "study_layers"), base=args.base,
                             layers=args.layers, offsets=args.offsets, depths=args.depth, indentor=args.indentor,
                             orientation=args.orientation, position_mm=args.position, nu=_given(args.nu),
                             side=args.side, data_csv=args.deflection, progress=not args.quiet,
@@ -118,7 +123,7 @@ def add_fit_material(p):
 
 
 def _run_fit_material(args):
-    text = run_fit_material(args.model, args.out or str(Path(args.model) / "fit_material"),
+    text = run_fit_material(args.model, _out(args.out, Path(args.model) / "fit_material"),
                             deflection_csv=args.deflection, force_csv=args.force, keep_ratios=args.keep_ratios,
                             base=args.base, free_layers=args.free_layers, bounds=tuple(args.bounds),
                             indentor=args.indentor, orientation=args.orientation, position_mm=args.position,
@@ -150,7 +155,7 @@ def add_line_load(p):
 
 
 def _run_line_load(args):
-    text = run_line_load(args.model, args.out or str(Path(args.model) / "line_load"), depths=args.depth,
+    text = run_line_load(args.model, _out(args.out, Path(args.model) / "line_load"), depths=args.depth,
                          material=_given(args.material), nu=_given(args.nu), large_deformation=args.large_deformation,
                          slip=args.slip, half_width_mm=args.half_width, half_length_mm=args.half_length,
                          step_mm=args.step, position_mm=args.position, progress=not args.quiet)
@@ -161,9 +166,9 @@ def _run_line_load(args):
 def add_contact_series(p):
     """The `contact-series` command's arguments on its parser `p`."""
     p.add_argument("model", help="model folder with mesh.vtu (+ model.json) from `pipeline.py mesh` (2D or 3D)")
-    p.add_argument("--force", type=positive_values("forces"),
+    p.add_argument("--force", dest="forces_N", type=positive_values("forces"),
                    help="constant force(s) in N (N/mm for 2D models): value, list or start:stop:step")
-    p.add_argument("--depth", type=positive_values("depths"), help="or constant depth(s) in mm")
+    p.add_argument("--depth", dest="depths_mm", type=positive_values("depths"), help="or constant depth(s) in mm")
     p.add_argument("--cylinders", type=words, help="cylinder codes, e.g. C1,C3,C5 (default C1-C8)")
     add_declared(p, Scene, ("material",))
     p.add_argument("--axis", "--orientation", dest="orientation",
@@ -177,9 +182,9 @@ def add_contact_series(p):
 
 
 def _run_contact_series(args):
-    text = run_contact_series(args.model, args.out or str(Path(args.model) / "contact_series"),
-                              material=_given(args.material), codes=args.cylinders, forces=args.force,
-                              depths=args.depth, orientation=args.orientation, position_mm=args.position, nu=_given(args.nu),
+    text = run_contact_series(args.model, _out(args.out, Path(args.model) / "contact_series"),
+                              material=_given(args.material), codes=args.cylinders, forces=args.forces_N,
+                              depths=args.depths_mm, orientation=args.orientation, position_mm=args.position, nu=_given(args.nu),
                               progress=not args.quiet)
     if not args.quiet:
         print(text)

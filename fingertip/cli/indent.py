@@ -10,7 +10,8 @@ from fem.core.materials import DEFAULT_CODE, DEFAULT_NU, Material
 from fem.experiments.scene import Experiment, Output, Receptors, Scene, load_scene
 from fingertip.cli.options import add_declared, declared_values, scheduler_option
 from fingertip.errors import InputError
-from fingertip.jobs.indent import indent_folder, prepare_folder
+from fingertip.jobs.indent import RUN_MARKER, indent_folder, prepare_folder
+from fingertip.resources import scene_names
 from fingertip.staging import check_output_dir
 
 EXPERIMENT_FLAGS = ("indentor", "orientation", "position_mm", "incline_deg", "equal_force", "max_depth_mm", "sweep")
@@ -63,16 +64,24 @@ def _run_prepare(args):
 def add_indent(p):
     """The `indent` command's arguments on its parser `p`."""
     p.add_argument("model", help=MODEL_HELP)
-    p.add_argument("--scene", help="TOML scene file (scenes/*.toml); the flags below describe one experiment")
+    p.add_argument("--scene", help="TOML scene file, or the name of a shipped scene (" + ", ".join(scene_names())
+                   + "); without it the flags below describe one experiment")
     load = p.add_mutually_exclusive_group()
     add_declared(load, Experiment, ("depth_mm", "force_N"))
     add_declared(p, Experiment, EXPERIMENT_FLAGS)
     add_material_and_receptors(p)
     add_declared(p, Output, OUTPUT_FLAGS, defaults={"plots": "the scene's, on"})
+    add_declared(p, Scene, ("max_indentations",), defaults={"max_indentations": "the scene's, 10000"})
     p.add_argument("--out", help="output folder (default: <model>/indent_<indentor or scene file stem>)")
     scheduler_option(p, "experiment of the scene")
     p.add_argument("--quiet", action="store_true", help="no progress and no summary")
-    p.set_defaults(run=_run_indent, check=indent_scene)
+    p.set_defaults(run=_run_indent, check=indent_scene, from_scene=FROM_SCENE)
+
+
+FROM_SCENE = ("depth_mm", "force_N") + EXPERIMENT_FLAGS + RECEPTOR_FLAGS + MATERIAL_FLAGS + OUTPUT_FLAGS \
+    + ("max_indentations",)
+"""Fields a --scene file sets unless their flag is given: an error about one names the scene's key,
+not the flag (`fingertip.cli.user_words`)."""
 
 
 def scene_of_flags(args) -> Scene:
@@ -81,7 +90,13 @@ def scene_of_flags(args) -> Scene:
     if not exp.get("indentor") or ("depth_mm" not in exp and "force_N" not in exp):
         raise InputError("indent needs --scene, or --indentor with --depth or --force")
     exp["name"] = exp["indentor"].replace(":", "_").replace(",", "_")
-    return Scene.from_dict({"experiment": [exp], "receptors": declared_values(args, Receptors, RECEPTOR_FLAGS)})
+    return Scene.from_dict({"experiment": [exp], "receptors": declared_values(args, Receptors, RECEPTOR_FLAGS)},
+                           max_indentations=_max_indentations(args))
+
+
+def _max_indentations(args) -> int | None:
+    """--max-indentations, None when not given (the scene's own bound holds)."""
+    return declared_values(args, Scene, ("max_indentations",)).get("max_indentations")
 
 
 def indent_scene(args) -> tuple[Scene, str]:
@@ -89,7 +104,7 @@ def indent_scene(args) -> tuple[Scene, str]:
     experiment of the flags, with --material, --nu, --pvd and --plots overriding the scene's. Reads
     the scene file only, not the model."""
     if args.scene:
-        scene, name = load_scene(args.scene), Path(args.scene).stem
+        scene, name = load_scene(args.scene, _max_indentations(args)), Path(args.scene).stem
     else:
         scene = scene_of_flags(args)
         name = scene.experiments[0].name
@@ -99,8 +114,8 @@ def indent_scene(args) -> tuple[Scene, str]:
     output = declared_values(args, Output, OUTPUT_FLAGS)
     if output:
         overrides["output"] = dataclasses.replace(scene.output, **output)
-    out = args.out or str(Path(args.model) / f"indent_{name}")
-    check_output_dir(out)
+    out = args.out if args.out is not None else str(Path(args.model) / f"indent_{name}")
+    check_output_dir(out, marker=RUN_MARKER, what="indent run")
     return dataclasses.replace(scene, **overrides), out
 
 

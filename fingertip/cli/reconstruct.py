@@ -2,21 +2,17 @@
 shape) and `run` (the chain reconstruct -> mesh [-> indent a scene])."""
 from __future__ import annotations
 
-from pathlib import Path
-
 from fem.geometry.presets import SHAPES
 from fingertip.cli.options import POSITIVE
 from fingertip.jobs.reconstruct import chain_stages, run_reconstruct
 from fingertip.jobs.render import run_render
+from fingertip.resources import shipped
 from fingertip.staging import check_output_dir
-
-SAMPLE_IMAGES = Path(__file__).resolve().parents[2] / "sample_images"
-"""The bundled synthetic turntable set, the main job's default input."""
 
 
 def add_reconstruct(p):
     """The `reconstruct` command's arguments on its parser `p`."""
-    p.add_argument("images", nargs="?", default=str(SAMPLE_IMAGES),
+    p.add_argument("images", nargs="?", default=str(shipped("sample_images")),
                    help="turntable folder (default: the bundled sample_images/)")
     p.add_argument("--out", default="out/sample", help="output folder (default out/sample)")
     p.add_argument("--spacing-mm", type=float, nargs=2, default=(0.5, 2.0), metavar=("MIN", "MAX"),
@@ -82,21 +78,31 @@ def _run_render(args):
 
 def add_run(p):
     """The `run` command's arguments on its parser `p`."""
-    p.add_argument("images", nargs="?", default=str(SAMPLE_IMAGES),
+    p.add_argument("images", nargs="?", default=str(shipped("sample_images")),
                    help="turntable folder (default: the bundled sample_images/)")
     p.add_argument("--out", default="out/sample", help="output folder for every stage (default out/sample)")
     p.add_argument("--size", type=POSITIVE, default=0.5, help="mesh: target edge length on the volar skin in mm")
     p.add_argument("--scene", help="indent: a TOML scene file to run on the model (optional)")
     p.add_argument("--force", action="store_true", help="recompute every stage")
     p.add_argument("--quiet", action="store_true", help="no progress and no summaries")
-    p.set_defaults(run=_run_run)
+    p.set_defaults(run=_run_run, kept=_run_kept)
+
+
+def _run_kept(args) -> str | None:
+    """What an interrupted chain keeps: the outputs of the stages it finished (None: none)."""
+    done = getattr(args, "stages_done", [])
+    if not done:
+        return None
+    return f"the {' and '.join(done)} outputs are kept in {args.out} and a rerun skips them"
 
 
 def _run_run(args):
     stages = chain_stages(args.images, args.out, args.size, args.scene, force=args.force, progress=not args.quiet)
+    args.stages_done = []
     for stage in stages:
         if not args.quiet:
             print(f"== {stage.name}")
         text = stage.run()
+        args.stages_done.append(stage.name)
         if not args.quiet:
             print(text)

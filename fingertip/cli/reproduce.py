@@ -1,7 +1,10 @@
 """`reproduce`: the source thesis claim by claim, into a report folder (`fingertip.jobs.reproduce`)."""
 from __future__ import annotations
 
+from pathlib import Path
+
 from fingertip.jobs.reproduce import run_reproduce
+from fingertip.staging import claimed
 
 
 def add_reproduce(p):
@@ -11,10 +14,24 @@ def add_reproduce(p):
     p.add_argument("--quick", action="store_true", help="coarse meshes (0.25 mm in the top 1 mm instead "
                                                         "of the thesis's 0.125 mm)")
     p.add_argument("--quiet", action="store_true", help="no progress and no summary")
-    p.set_defaults(run=_run_reproduce)
+    p.set_defaults(run=_run_reproduce, kept=kept)
+
+
+def kept(args) -> str | None:
+    """What an interrupted reproduce keeps: the claims done (claims/<name>.json), which a rerun
+    resumes, and the meshes made (None: nothing, the folder does not exist)."""
+    out = Path(args.out)
+    if not out.is_dir() or not any(out.iterdir()):
+        return None
+    done = len(list((out / "claims").glob("*.json")))
+    if done:
+        return (f"the {done} claim{'s' if done != 1 else ''} done {'are' if done != 1 else 'is'} kept in {out} "
+                f"and a rerun resumes {'them' if done != 1 else 'it'}")
+    return f"no claim was done yet; what was made in {out} (the meshes) is kept and a rerun reuses it"
 
 
 def _run_reproduce(args):
-    text = run_reproduce(args.out, quick=args.quick, progress=not args.quiet)
+    with claimed(args.out):
+        text = run_reproduce(args.out, quick=args.quick, progress=not args.quiet)
     if not args.quiet:
         print(text)

@@ -12,11 +12,13 @@ from fem.io.runfolder import IndentRun
 from fem.receptors.analysis import UnitAnalysis, analyze, as_runs
 from fem.receptors.neural import NeuralData, read_neural_csv
 from fingertip.errors import InputError
-from fingertip.staging import check_output_dir, staged_output, write_json
+from fingertip.staging import check_output_dir, claimed, staged_output, write_json
 from fingertip.tables import columns_of, write_csv, write_markdown
 
 DPI = 110
 FLOAT_FORMAT = "%.6g"
+MARKER = "analysis.json"
+"""The file that marks an analysis folder: a rerun replaces such a folder as a whole."""
 
 
 def write_table(folder: Path, stem: str, rows: list[dict], title: str) -> None:
@@ -35,9 +37,9 @@ def _safe(s: str) -> str:
 
 def write_report(out_dir, runs, neural: NeuralData, results: list[UnitAnalysis], top: int = 3) -> list[str]:
     """Tables (CSV + Markdown), profile and scatter figures and analysis.json into out_dir
-    (atomically). Returns the file names."""
+    (atomically, replacing an earlier analysis there as a whole). Returns the file names."""
     runs = as_runs(runs)
-    with staged_output(out_dir) as tmp:
+    with staged_output(out_dir, replace=True) as tmp:
         combined = [dict(rank=i + 1, **f.row()) for ua in results for i, f in enumerate(ua.combined)]
         write_table(tmp, "ranking_combined", combined, "Candidates on all stimuli pooled (thesis tables 4.3-4.4), "
                                                        "ascending RMS error")
@@ -69,13 +71,15 @@ def run_analyze(results, neural_csv, out_dir=None, diameters_mm=None, measures=N
         raise InputError("give one results folder, or two (2D models of two diameters)")
     if diameters_mm is not None and len(results) != 2:
         raise InputError("--diameters needs two results folders")
-    out = check_output_dir(out_dir if out_dir else Path(results[0]) / "analysis")
+    out = check_output_dir(out_dir if out_dir is not None else Path(results[0]) / "analysis", marker=MARKER,
+                           what="analysis")
     runs = as_runs([IndentRun(r, None if diameters_mm is None else diameters_mm[i]) for i, r in enumerate(results)])
     neural = read_neural_csv(neural_csv)
     cands = list(measures) if measures else None
     fit = list(fit_on) if fit_on else None
-    res = analyze(runs, neural, cands, fit, receptor_x_mm, orientation)
-    names = write_report(out, runs, neural, res)
+    with claimed(out):
+        res = analyze(runs, neural, cands, fit, receptor_x_mm, orientation)
+        names = write_report(out, runs, neural, res)
     lines = [f"receptor analysis in {out}: {', '.join(names)}"]
     for ua in res:
         lines.append(f"  unit {ua.unit}: {len(neural.only(unit=ua.unit))} recorded rates, fit on "

@@ -26,12 +26,12 @@ from fem.geometry.layered import PRESET_PARAMS
 from fem.geometry.presets import PRESETS_2D
 from fingertip.distribute import TaskFailed, TaskRunner, parse_scheduler, require_dask
 from fingertip.errors import InputError
-from fingertip.jobs.indent import run_indent
+from fingertip.jobs.indent import RUN_MARKER, run_indent
 from fingertip.jobs.mesh import check_mesh, mesh_folder
 from fingertip.jobs.reconstruct import run_reconstruct
 from fingertip.jobs.tasks import task_threads
 from fingertip.progress import as_progress
-from fingertip.staging import check_output_dir, staged_output
+from fingertip.staging import check_output_dir, claimed, staged_output
 from fingertip.tables import write_csv
 from reconstruct.turntable import load_turntable
 
@@ -85,6 +85,9 @@ def parse_subject(word: str) -> Subject:
     path = Path(word)
     if path.is_file() and path.suffix == ".json":
         return Subject(path.resolve().parent.name, "sections", str(path))
+    if path.exists() and not path.is_dir():
+        raise InputError(f"subject '{word}' is a file but not a sections.json: give a turntable folder, a folder "
+                         f"with sections.json, or preset:NAME")
     if not path.is_dir():
         raise InputError(f"subject '{word}' does not exist: give a turntable folder, a folder with "
                          f"sections.json, or preset:NAME")
@@ -124,6 +127,7 @@ def check_batch(subjects: list[Subject], scene_path, out_dir, mesh: MeshOptions 
         try:
             scene.check_dim(2 if s.two_d else 3)
             check_mesh(Path(out_dir) / s.name, s.mesh_spec(out_dir, mesh))
+            check_output_dir(Path(out_dir) / s.name / Path(scene_path).stem, marker=RUN_MARKER, what="indent run")
         except InputError as exc:
             raise InputError(f"subject '{s.name}': {exc}") from None
     require_dask(sched)
@@ -204,10 +208,15 @@ def run_batch(subjects: list[Subject], scene_path, out_dir, mesh: MeshOptions = 
     """`pipeline.py batch`: every subject through the scene, then out_dir/summary.csv and
     cohort.png; returns the summary text. Checks everything first (`check_batch`). progress:
     True (on stderr), False, or a progress object: a line per subject as it ends."""
+    _, sched = check_batch(subjects, scene_path, out_dir, mesh, scheduler)
+    with claimed(out_dir):
+        return _run_batch(subjects, scene_path, Path(out_dir), mesh, sched, force, progress)
+
+
+def _run_batch(subjects, scene_path, out: Path, mesh: MeshOptions, sched, force: bool, progress) -> str:
+    """`run_batch` after its checks, holding the cohort folder."""
     from fem import plots  # matplotlib: 0.4 s of import, not needed by the tasks
 
-    _, sched = check_batch(subjects, scene_path, out_dir, mesh, scheduler)
-    out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     calls = [(s, str(out), str(scene_path), mesh, force) for s in subjects]
     progress = as_progress(progress)

@@ -29,16 +29,22 @@ from fingertip.distribute import parse_scheduler, require_dask
 from fingertip.errors import InputError
 from fingertip.jobs.tasks import task_map
 from fingertip.progress import as_progress
-from fingertip.staging import check_output_dir, staged_output, write_json
+from fingertip.staging import check_output_dir, holding, staged_output, write_json
 from fingertip.tables import write_csv
 
 DPI = 100
 
 
-def _check_start(out_dir, *indentors, orientation=None, scheduler=None):
-    """The refusals that need no model, before any is read: output folder, indentor codes,
-    orientation, the scheduler (Dask installed when it needs it); returns the Scheduler."""
-    check_output_dir(out_dir)
+MARKERS = {"study-layers": "layer_study.json", "fit-material": "fit.json", "contact-series": "cylinder_series.json",
+           "line-load": "line_load.json"}
+"""The file that marks each command's output folder: a rerun replaces such a folder as a whole."""
+
+
+def _check_start(command, out_dir, *indentors, orientation=None, scheduler=None):
+    """The refusals that need no model, before any is read: output folder (new, empty or an
+    earlier output of `command`), indentor codes, orientation, the scheduler (Dask installed when
+    it needs it); returns the Scheduler."""
+    check_output_dir(out_dir, marker=MARKERS[command], what=f"{command} output")
     for code in indentors:
         shapes_for(code)
     if orientation is not None:
@@ -62,6 +68,7 @@ def _force_unit(dim: int) -> str:
     return "N per mm (2D plane strain)" if dim == 2 else "N"
 
 
+@holding()
 def run_study_layers(model_dir, out_dir, base=None, layers=(1, 2, 3, 4), offsets=(-1, 0, 1), depths=(2.0,),
                      indentor="wedge", orientation=None, position_mm=None, nu=None, side="mean",
                      data_csv=None, progress=False, scheduler=None) -> str:
@@ -70,7 +77,7 @@ def run_study_layers(model_dir, out_dir, base=None, layers=(1, 2, 3, 4), offsets
     scheduler (here and in run_fit_material): none (default), local:N or tcp://HOST:PORT: the
     trial materials as tasks on Dask workers (fingertip.distribute), the same numbers as none."""
     t0 = time.perf_counter()
-    sched = _check_start(out_dir, indentor, orientation=orientation, scheduler=scheduler)
+    sched = _check_start("study-layers", out_dir, indentor, orientation=orientation, scheduler=scheduler)
     depth_list, layer_list, offset_list = list(depths), list(layers), list(offsets)
     data = read_deflection_csv(data_csv) if data_csv else []
     with task_map(sched, "trial material", as_progress(progress)) as map_:
@@ -79,7 +86,7 @@ def run_study_layers(model_dir, out_dir, base=None, layers=(1, 2, 3, 4), offsets
         study = layer_study(exp, base, layer_list, offset_list, depth_list)
         base_prof = exp.profiles(base, depth_list)
         fits = [idealised_fits(p) for p in base_prof]
-    with staged_output(out_dir) as tmp:
+    with staged_output(out_dir, replace=True) as tmp:
         rows = [(code, p.depth_mm, float(d), float(w)) for code, profs in study.profiles.items()
                 for p in profs for d, w in zip(p.distance_mm, p.deflection_mm)]
         write_csv(tmp / "layer_study.csv", _columns(("code", "depth_mm", "distance_mm", "deflection_mm"), rows))
@@ -109,6 +116,7 @@ def run_study_layers(model_dir, out_dir, base=None, layers=(1, 2, 3, 4), offsets
     return "\n".join(lines)
 
 
+@holding()
 def run_fit_material(model_dir, out_dir, deflection_csv=None, force_csv=None, keep_ratios=False, base=None,
                      free_layers=(2, 3, 4), bounds=(1.0, 7.0), indentor="wedge", orientation=None,
                      position_mm=None, force_indentor="plate", match="least-squares", nu=None,
@@ -117,7 +125,8 @@ def run_fit_material(model_dir, out_dir, deflection_csv=None, force_csv=None, ke
     if deflection_csv is None and force_csv is None:
         raise InputError("fit-material needs --deflection CSV and/or --force CSV")
     t0 = time.perf_counter()
-    sched = _check_start(out_dir, indentor, force_indentor, orientation=orientation, scheduler=scheduler)
+    sched = _check_start("fit-material", out_dir, indentor, force_indentor, orientation=orientation,
+                         scheduler=scheduler)
     free = list(free_layers)
     if not bounds[0] < bounds[1]:
         raise InputError(f"--bounds {bounds[0]:g} {bounds[1]:g}: give LO < HI (log10 modulus in Pa), e.g. 1 7")
@@ -143,7 +152,7 @@ def run_fit_material(model_dir, out_dir, deflection_csv=None, force_csv=None, ke
                                    "base material" if ratios is base_v else "deflection fit",
                                    "force_unit": _force_unit(exp.dim)}
     report["seconds"] = round(time.perf_counter() - t0, 2)
-    with staged_output(out_dir) as tmp:
+    with staged_output(out_dir, replace=True) as tmp:
         write_json(tmp / "fit.json", report)
         if fit is not None:
             depths = [p.depth_mm for p in data]
@@ -172,20 +181,21 @@ def run_fit_material(model_dir, out_dir, deflection_csv=None, force_csv=None, ke
     return "\n".join(lines)
 
 
+@holding()
 def run_contact_series(model_dir, out_dir, material=None, codes=None, forces=None, depths=None,
                        orientation=None, position_mm=None, nu=None, progress=False) -> str:
     """`pipeline.py contact-series`: cylinder_series.csv / .json / .png in out_dir."""
     if (forces is None) == (depths is None):
         raise InputError("contact-series needs --force or --depth (one of the two)")
     t0 = time.perf_counter()
-    _check_start(out_dir, orientation=orientation)
+    _check_start("contact-series", out_dir, orientation=orientation)
     loads = list(forces if forces is not None else depths)
     exp = _experiment(model_dir, "wedge", orientation, position_mm, nu, "mean", progress)
     material = material or folder_material(exp.info)[0]
     s = cylinder_series(exp, material, codes, **({"forces_N": loads} if forces is not None else {"depths_mm": loads}))
     force_unit = "N/mm" if exp.dim == 2 else "N"
     area = "contact width, mm" if exp.dim == 2 else "contact area, mm^2"
-    with staged_output(out_dir) as tmp:
+    with staged_output(out_dir, replace=True) as tmp:
         j, k = np.meshgrid(np.arange(len(s.loads)), np.arange(len(s.codes)), indexing="ij")
         j, k = j.ravel(), k.ravel()
         write_csv(tmp / "cylinder_series.csv", {
@@ -206,13 +216,14 @@ def run_contact_series(model_dir, out_dir, material=None, codes=None, forces=Non
     return "\n".join(lines)
 
 
+@holding()
 def run_line_load(model_dir, out_dir, depths=(0.05, 0.5, 1.0, 2.0), material=None, nu=None, large_deformation=False,
                   slip=False, half_width_mm=0.25, half_length_mm=1.0, step_mm=0.1, position_mm=None,
                   progress=False) -> str:
     """`pipeline.py line-load`: line_load.csv / .json / .png in out_dir (linear; with
     large_deformation also the neo-Hookean solve and where the two part)."""
     t0 = time.perf_counter()
-    _check_start(out_dir)
+    _check_start("line-load", out_dir)
     depth_list = list(depths)
     info = folder_info(model_dir)
     material = material or folder_material(info)[0]
@@ -220,7 +231,7 @@ def run_line_load(model_dir, out_dir, depths=(0.05, 0.5, 1.0, 2.0), material=Non
     c = compare_line_load(model_dir, depth_list, material=material, nu=nu, half_width_mm=half_width_mm,
                           step_mm=step_mm, position_mm=position_mm, slip=slip, half_length_mm=half_length_mm,
                           large_deformation=large_deformation, progress=progress)
-    with staged_output(out_dir) as tmp:
+    with staged_output(out_dir, replace=True) as tmp:
         n = len(c.distance_mm)
         write_csv(tmp / "line_load.csv", {
             "depth_mm": np.repeat(np.asarray(c.depths_mm, float), n),

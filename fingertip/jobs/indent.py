@@ -9,19 +9,24 @@ from __future__ import annotations
 import logging
 import time
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from fem.experiments.response import ResponseStore
 from fem.experiments.runner import prepare_responses, run_scene
 from fem.experiments.scene import Receptors, Scene
+from fem.io.modelfolder import folder_info
 from fem.io.runfolder import write_run
 from fingertip.distribute import parse_scheduler, require_dask
 from fingertip.jobs.tasks import task_map
 from fingertip.progress import as_progress
-from fingertip.staging import check_output_dir, staged_output
+from fingertip.staging import check_output_dir, check_writable_folder, claimed, staged_output
 
 logger = logging.getLogger(__name__)
+
+RUN_MARKER = "run.json"
+"""The file that marks a run folder (fem.io.runfolder): a rerun replaces such a folder as a whole."""
 
 
 def indent_folder(model_dir, out_dir, scene: Scene, progress=True, scheduler=None) -> str:
@@ -45,15 +50,30 @@ class Indented:
 def run_indent(model_dir, out_dir, scene: Scene, progress=True, scheduler=None) -> Indented:
     """`indent_folder`, returning the tables it wrote with the summary."""
     t_start = time.perf_counter()
-    check_output_dir(out_dir)
+    check_output_dir(out_dir, marker=RUN_MARKER, what="indent run")
     sched = parse_scheduler(scheduler)
     require_dask(sched)
     progress = as_progress(progress)
-    with task_map(sched, "experiment", progress) as map_:
-        run = run_scene(model_dir, scene, store=ResponseStore.existing(model_dir), map=map_, progress=progress)
-    for warning in run.warnings:
-        logger.warning(warning)
-    with staged_output(out_dir) as tmp:
+    with claimed(out_dir):
+        with task_map(sched, "experiment", progress) as map_:
+            run = run_scene(model_dir, scene, store=ResponseStore.existing(model_dir), map=map_, progress=progress)
+        for warning in run.warnings:
+            logger.warning(warning)
+        tables = _write(out_dir, model_dir, scene, run)
+    total = time.perf_counter() - t_start
+    model = run.model
+    lines = [(f"indentation results in {out_dir} ({total:.1f} s; model {model.ndof} DOFs, "
+              f"{len(run.surface.nodes)} contact candidates, {len(run.grid.points_mm)} receptor points)")]
+    lines += [experiment_line(e, model.dim) for e in run.experiments]
+    lines += [afferent_line(name, resp) for name, resp in run.afferents[1].items()]
+    lines += [f"  response model: {how} {key} ({size / 2**20:.1f} MB, built in {built:.2f} s)"
+              for key, how, built, size in run.responses]
+    return Indented("\n".join(lines), tables)
+
+
+def _write(out_dir, model_dir, scene: Scene, run) -> dict:
+    """The run folder of a scene run, replacing an earlier one as a whole; returns its tables."""
+    with staged_output(out_dir, replace=True) as tmp:
         tables = write_run(tmp, model_dir, run, run.afferents)
         if scene.output.plots:
             from fem import (
@@ -67,15 +87,7 @@ def run_indent(model_dir, out_dir, scene: Scene, progress=True, scheduler=None) 
                     depth = tables[e.name]["steps"]["depth_mm"]
                     for name, fig in plots.afferent_figures(e.name, run.afferents[1][e.name], depth).items():
                         plots.save(fig, tmp / name)
-    total = time.perf_counter() - t_start
-    model = run.model
-    lines = [(f"indentation results in {out_dir} ({total:.1f} s; model {model.ndof} DOFs, "
-              f"{len(run.surface.nodes)} contact candidates, {len(run.grid.points_mm)} receptor points)")]
-    lines += [experiment_line(e, model.dim) for e in run.experiments]
-    lines += [afferent_line(name, resp) for name, resp in run.afferents[1].items()]
-    lines += [f"  response model: {how} {key} ({size / 2**20:.1f} MB, built in {built:.2f} s)"
-              for key, how, built, size in run.responses]
-    return Indented("\n".join(lines), tables)
+    return tables
 
 
 def prepare_folder(model_dir, material=None, nu=None, approach=None, receptors: Receptors = Receptors(),
@@ -83,6 +95,9 @@ def prepare_folder(model_dir, material=None, nu=None, approach=None, receptors: 
     """Build (or find) the response model of a model folder (`fem.experiments.runner.
     prepare_responses`); approach: (3,) or None (the model's support); returns the summary text."""
     t0 = time.perf_counter()
+    folder_info(model_dir)                              # a model folder (mesh.vtu), then a writable one
+    for folder in (Path(model_dir), Path(model_dir) / "response"):     # it stores <model>/response/<key>/
+        check_writable_folder(folder, "the model folder" if folder.name != "response" else "the folder")
     p = prepare_responses(model_dir, material, nu, approach, receptors, as_progress(progress))
     return (f"response model {p.how} in {p.store.path(p.key)} ({time.perf_counter() - t0:.1f} s): "
             f"{p.candidates} contact candidates along {(np.round(p.approach, 6) + 0.0).tolist()}, "

@@ -6,7 +6,7 @@ import logging
 
 from fem.geometry.build import MeshSpec, build_folder
 from fingertip.progress import as_progress
-from fingertip.staging import check_output_dir
+from fingertip.staging import check_output_dir, claimed
 
 logger = logging.getLogger(__name__)
 
@@ -21,7 +21,8 @@ def mesh_folder(out, spec: MeshSpec, force: bool = False, progress=True) -> str:
     """Build the model folder `out` of `spec` (a current 3D folder is kept unless force); mesh
     warnings are logged. Returns the summary text."""
     check_mesh(out, spec)
-    built = build_folder(out, spec, force=force, progress=as_progress(progress))
+    with claimed(out):
+        built = build_folder(out, spec, force=force, progress=as_progress(progress))
     for warning in built.warnings:
         logger.warning(warning)
     return built.summary

@@ -9,9 +9,9 @@ from typing import Callable
 
 from fem.experiments.scene import load_scene
 from fem.geometry.build import MeshSpec
-from fingertip.jobs.indent import indent_folder
+from fingertip.jobs.indent import RUN_MARKER, indent_folder
 from fingertip.jobs.mesh import check_mesh, mesh_folder
-from fingertip.staging import check_output_dir
+from fingertip.staging import check_output_dir, claimed
 from reconstruct.pipeline import reconstruct_folder
 
 
@@ -20,8 +20,9 @@ def run_reconstruct(images, out_dir, spacing_mm=(0.5, 2.0), tol_mm: float = 0.02
     """Reconstruct the turntable folder `images` into out_dir; returns the summary text (a one-line
     note instead when out_dir already holds the outputs of these images and options)."""
     check_output_dir(out_dir)
-    result = reconstruct_folder(images, out_dir, spacing_mm=tuple(spacing_mm), tol_mm=tol_mm,
-                                tip_fraction=tip_fraction, progress=progress, force=force)
+    with claimed(out_dir):
+        result = reconstruct_folder(images, out_dir, spacing_mm=tuple(spacing_mm), tol_mm=tol_mm,
+                                    tip_fraction=tip_fraction, progress=progress, force=force)
     if result is None:
         return f"{out_dir}: outputs are current for these images and options (use --force to redo)"
     return result.summary() + f"\nwritten to      {out_dir}/ (sections.json, surface.stl, report.png)"
@@ -40,8 +41,7 @@ def chain_stages(images, out_dir, size_mm: float, scene_path=None, force: bool =
     into out_dir, mesh its sections there with volar edge length size_mm, and run the scene file
     (if any) into <out_dir>/indent_<scene stem>. Each stage runs as its own command would (its
     defaults, its check for current outputs); force redoes reconstruct and mesh."""
-    out = Path(out_dir)
-    check_output_dir(out)
+    out = check_output_dir(out_dir)
     spec = MeshSpec(source=str(out), sizes={"size_mm": size_mm})
     check_mesh(out, spec)
     stages = [Stage("reconstruct", lambda: run_reconstruct(images, out, force=force, progress=progress)),
@@ -49,6 +49,6 @@ def chain_stages(images, out_dir, size_mm: float, scene_path=None, force: bool =
     if scene_path:
         scene = load_scene(scene_path)
         run_dir = out / f"indent_{Path(scene_path).stem}"
-        check_output_dir(run_dir)
+        check_output_dir(run_dir, marker=RUN_MARKER, what="indent run")
         stages.append(Stage("indent", lambda: indent_folder(out, run_dir, scene, progress=progress)))
     return stages

@@ -3,10 +3,11 @@ from __future__ import annotations
 
 from fem.geometry.presets import make_shape
 from fingertip.errors import InputError
-from fingertip.staging import check_output_dir
+from fingertip.staging import holding
 from reconstruct.synthetic import render_turntable
 
 
+@holding()
 def run_render(shape_name: str, out_dir, views: int = 100, span_deg: float = 360.0, size_px=(700, 900),
                mm_per_px: float = 0.04, aspect: float = 1.0, blur_px: float = 0.8, noise: float = 2.0,
                vignetting: float = 0.25, axis_offset_px: float = 0.0, tilt_deg: float = 0.0,
@@ -15,7 +16,6 @@ def run_render(shape_name: str, out_dir, views: int = 100, span_deg: float = 360
                distortion: str | None = None, checkerboard: int = 0) -> str:
     """Render one of fem.geometry.presets.SHAPES into out_dir (images, turntable.toml, truth.json); returns
     the summary text. distortion: "K1" or "K1,K2" (radial Brown coefficients)."""
-    check_output_dir(out_dir)
     k = None
     if distortion is not None:
         try:

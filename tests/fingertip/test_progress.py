@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 
+import fingertip.progress
 import pipeline
 from fem import plots
 from fingertip.progress import SILENT, Progress, TimingHistory, as_progress
@@ -47,7 +48,23 @@ def test_task_line_and_silence():
     assert list(SILENT.bar([1, 2])) == [1, 2]
 
 
-def test_indent_progress_on_stderr_and_quiet(cyl8, tmp_path, capsys):
+def test_bars_show_only_after_a_delay():
+    """A loop that ends (or is refused) within BAR_DELAY_S prints nothing; a longer one its bar."""
+    stream = io.StringIO()
+    p = Progress(stream=stream, history=None)
+    assert list(p.bar(range(3), desc="quick")) == [0, 1, 2]
+    assert stream.getvalue() == ""
+    with pytest.raises(ValueError):
+        for _ in p.bar(range(3), desc="refused"):
+            raise ValueError("refused on the first item")
+    assert stream.getvalue() == ""
+    for _ in p.bar(range(2), desc="slow", delay=0.05):
+        time.sleep(0.1)
+    assert "slow" in stream.getvalue() and "2/2" in stream.getvalue()
+
+
+def test_indent_progress_on_stderr_and_quiet(cyl8, tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(fingertip.progress, "BAR_DELAY_S", 0.0)          # the bar at once, however quick
     args = ["indent", str(cyl8), "--indentor", "C5", "--depth", "0.25:1:0.25"]
     assert pipeline.main(args + ["--out", str(tmp_path / "a")]) == 0
     out, err = capsys.readouterr()
@@ -85,8 +102,8 @@ def test_pvd_timesteps_are_depths_and_offsets(cyl8, tmp_path):
     files = [d.get("file") for d in ET.parse(out / "C5.pvd").getroot().iter("DataSet")]
     assert files == [f"C5_{i:03d}.vtu" for i in range(4)]
     out = tmp_path / "s"
-    assert pipeline.main(["indent", str(cyl8), "--indentor", "bar:1.5", "--force", "0.002", "--sweep",
-                          "x=-2:2:0.5", "--out", str(out), "--quiet"]) == 0
+    assert pipeline.main(["indent", str(cyl8), "--indentor", "bar:1.5", "--force", "0.001", "--sweep",
+                          "x=-2:2:0.5", "--out", str(out), "--quiet"]) == 0    # within the 3 mm over the bone
     assert np.allclose(_pvd_times(out / "bar_1.5.pvd"), np.arange(-2, 2.001, 0.5))
 
 

@@ -7,7 +7,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from fingertip.tables import _cells, csv_text
+from fingertip.tables import _cells, csv_text, read_numbers
 
 
 def _csv_module(columns, nan=None) -> str:
@@ -37,3 +37,12 @@ def test_csv_text_is_the_csv_modules(columns, nan):
 def test_quoting_and_empty_tables():
     assert csv_text({"name": ["a,b", "c"], "v_mm": [1.0, 2.5]}) == 'name,v_mm\r\n"a,b",1\r\nc,2.5\r\n'
     assert csv_text({"v_mm": np.zeros(0)}) == "v_mm\r\n"
+
+
+def test_read_numbers_accepts_a_byte_order_mark(tmp_path):
+    """Deflection and force CSVs saved by Excel as "CSV UTF-8" start with a BOM."""
+    p = tmp_path / "force.csv"
+    p.write_bytes("\ufeffdepth_mm,force_N\r\n0.5,0.01\r\n1,0.03\r\n".encode())
+    np.testing.assert_allclose(read_numbers(p, ("depth_mm", "force_N")), [[0.5, 0.01], [1, 0.03]])
+    p.write_bytes("\ufeff0.5,0.01\n".encode())                                      # no header
+    np.testing.assert_allclose(read_numbers(p, ("depth_mm", "force_N")), [[0.5, 0.01]])

@@ -164,3 +164,39 @@ def test_no_progress_before_an_error_and_summary_names_the_folder(good, tmp_path
     code = pipeline.main(["reconstruct", str(good), "--out", str(tmp_path / "ok")])
     out = capsys.readouterr().out
     assert code == 0 and f"written to      {tmp_path / 'ok'}/" in out
+
+
+def test_finger_running_off_the_side_names_the_image(tmp_path, capsys):
+    """Zoomed in so far that the finger leaves the image on most rows of a view (was an IndexError
+    in reconstruct.pipeline._trim): refused naming the image and what to do."""
+    folder = tmp_path / "zoomed"
+    render_turntable(make_shape("fingertip"), folder, **{**SMALL, "mm_per_px": 0.085})
+    err = _fails(folder, capsys, tmp_path, "the finger touches the left image frame of view_000", "zoom out")
+    assert "internal error" not in err
+
+
+def test_truncated_jpeg_is_refused_before_decoding(tmp_path, capfd):
+    """A truncated JPEG: one line naming it, no libjpeg noise (checked on the file descriptor)."""
+    folder = tmp_path / "jpg"
+    render_turntable(make_shape("fingertip"), folder, **SMALL, image_format="jpg")
+    victim = sorted(folder.glob("view_*.jpg"))[3]
+    victim.write_bytes(victim.read_bytes()[:-len(victim.read_bytes()) // 2])
+    out = tmp_path / "out"
+    code = pipeline.main(["reconstruct", str(folder), "--out", str(out), "--quiet"])
+    err = capfd.readouterr().err.strip()
+    assert code == 2 and err.count("\n") == 0, err
+    assert err.startswith("error: image") and victim.name in err and "truncated" in err
+    assert not out.exists()
+
+
+def test_dotfiles_are_not_views(good, tmp_path):
+    """macOS `._view_000.png` resource forks (and any dotfile) in the folder are ignored."""
+    from reconstruct.turntable import load_turntable
+
+    f = _copy(good, tmp_path)
+    first = _views(f)[0]
+    (f / f"._{first.name}").write_bytes(b"\x00\x05\x16\x07 AppleDouble")
+    (f / ".hidden_012.0deg.png").write_bytes(first.read_bytes())
+    table = load_turntable(f)
+    assert [p.name for p in table.image_paths] == [p.name for p in _views(f)]
+    assert pipeline.main(["reconstruct", str(f), "--out", str(tmp_path / "o"), "--quiet"]) == 0

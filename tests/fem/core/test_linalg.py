@@ -226,3 +226,24 @@ def test_drop_round_off_leaves_a_pattern_free_of_summation_order():
     np.testing.assert_array_equal(a.indices, b.indices)
     assert abs(a - A).max() == 0 and a.nnz == A.nnz
     np.testing.assert_allclose(a.diagonal(), A.diagonal(), rtol=0)
+
+
+def test_interruptible_call_hands_ctrl_c_to_the_caller_at_once():
+    """A long call that releases Python's lock runs in its own thread: Ctrl-C (here simulated with
+    _thread.interrupt_main) reaches the waiting caller within a few WAIT_S, not when the call
+    returns; a result or an error of a call that ends comes back as from a direct call."""
+    import _thread
+    import threading
+    import time
+
+    from fem.core.linalg import WAIT_S, interruptible
+
+    assert interruptible(sum, [1, 2, 3]) == 6
+    with pytest.raises(ZeroDivisionError):
+        interruptible(lambda: 1 / 0)
+    timer = threading.Timer(0.2, _thread.interrupt_main)
+    timer.start()
+    t0 = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt):
+        interruptible(time.sleep, 5.0)                   # stands in for a PARDISO factorisation
+    assert time.perf_counter() - t0 < 0.2 + 3 * WAIT_S

@@ -258,7 +258,11 @@ def preset_replica(tmp_path, preset, scale=1.0):
 
 
 def test_preset_middle_widths_and_size_rule_reproduce_the_presets():
-    from fem.geometry.layered import PRESET_MIDDLE_WIDTH_MM, PRESET_PARAMS, size_defaults
+    from fem.geometry.layered import (
+        PRESET_MIDDLE_WIDTH_MM,
+        PRESET_PARAMS,
+        size_defaults,
+    )
     from fem.geometry.sections import preset_sections
 
     for preset, width in PRESET_MIDDLE_WIDTH_MM.items():

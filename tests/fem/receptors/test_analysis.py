@@ -211,6 +211,15 @@ def test_neural_csv_comments_aliases_and_defaults(tmp_path):
     np.testing.assert_allclose(data.rate_ips, [12, 3.5])
 
 
+def test_neural_csv_saved_by_excel_with_a_byte_order_mark(tmp_path):
+    """Excel's "CSV UTF-8" starts with a BOM (and ends lines with CRLF): read as without it."""
+    p = tmp_path / "excel.csv"
+    p.write_bytes("\ufeffstimulus,position_mm,rate_ips,unit\r\ngrating,0.5,12,µ1\r\nbar,-0.2,3.5,µ1\r\n".encode())
+    data = read_neural_csv(p)
+    assert data.stimuli == ["grating", "bar"] and data.units == ["µ1"]
+    np.testing.assert_allclose(data.rate_ips, [12, 3.5])
+
+
 # ----------------------------------------------------------------------------- results folder contract
 def _rewrite_receptors(folder, stimulus, change):
     """Rewrite <stimulus>_receptors.csv through change(header, rows) -> (header, rows)."""

@@ -20,6 +20,7 @@ from fem.receptors.transduction import (
     spike_trains,
 )
 from fingertip.errors import InputError
+from fingertip.resources import shipped
 
 E_STAR = 0.05 / (1 - 0.4 ** 2)      # TouchSim skin: E = 0.05 MPa, nu = 0.4 -> E* = 0.0595 MPa
 PIN_MM = 1.0                        # flat pin radius of TouchSim's ramp regression tests
@@ -241,8 +242,9 @@ def test_resample_is_piecewise_linear_at_5khz():
 def test_data_file_holds_the_published_tables():
     """data/touchsim_afferents.json next to the package (found from an editable install), with the
     shapes and spot values of TouchSim's constants.py."""
-    assert tr.DATA_FILE.is_file() and tr.DATA_FILE.parent.name == "data"
-    raw = json.loads(tr.DATA_FILE.read_text())
+    path = shipped(tr.DATA_FILE)
+    assert path.is_file() and path.parent.name == "data"
+    raw = json.loads(path.read_text())
     assert "hsaal/touchsim" in raw["source"]["repository"] and "constants.py" in raw["source"]["file"]
     assert "PNAS" in raw["source"]["citation"] and "p12" in raw["units"]
     shapes = {c: class_data(c).parameters.shape for c in CLASSES}

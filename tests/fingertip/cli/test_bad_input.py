@@ -98,7 +98,7 @@ def test_run_checks_mesh_sizes_before_reconstructing(tmp_path):
     (["--indentor", "wedge:abc", "--depth", "1"], "wedge half-angle"),
     (["--indentor", "two-point:x", "--depth", "1"], "two-point separation"),
     (["--indentor", "two-point:-1", "--depth", "1"], "two-point separation"),
-    (["--indentor", "C5", "--depth", "-1"], "depth_mm"),
+    (["--indentor", "C5", "--depth", "-1"], "--depth must be finite and >= 0, got -1"),
     (["--indentor", "C5", "--depth", "0.5", "--axis", "sideways"], "orientation"),
     (["--indentor", "C5", "--depth", "0.5", "--material", "mXYZ"], "material code"),
     (["--indentor", "C5", "--depth", "0.5", "--nu", "0.7"], "Poisson"),
@@ -122,9 +122,9 @@ def test_indent_scene_types_checked_before_the_model(work, tmp_path):
     (["mesh", "--preset", "monkey", "--size", "-1"], "--size"),
     (["mesh", "--preset", "monkey", "--coarse", "0"], "--coarse"),
     (["mesh", "--preset", "monkey", "--epidermis", "nan"], "--epidermis"),
-    (["mesh", "--preset", "monkey", "--size", "0.01"], "size_mm"),
+    (["mesh", "--preset", "monkey", "--size", "0.01"], "--size 0.01 mm is below 0.1 mm"),
     (["mesh", "--preset", "cylinder8", "--growth", "-2"], "--growth"),
-    (["mesh", "--preset", "monkey", "--layer3-scale", "3"], "layer3_scale"),
+    (["mesh", "--preset", "monkey", "--layer3-scale", "3"], "--layer3-scale"),
     (["study-layers", "{model}", "--depth", "-1"], "depths"),
     (["study-layers", "{model}", "--layers", "x"], "layers"),
     (["study-layers", "{model}", "--indentor", "wedge:abc"], "wedge"),
@@ -230,3 +230,187 @@ def test_interrupt_while_meshing(tmp_path, sig, code):
                           capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert (out / "mesh.vtu").is_file() and len(list((tmp_path / "cache").rglob("*.npz"))) == 1
+
+
+# --------------------------------------------------------------------------- escapes found by a user
+@pytest.mark.parametrize("flags, pattern", [
+    (["--depth", "30"], "--depth 30 mm is beyond the 3 mm of tissue over the bone of this model; give --depth up to 3"),
+    (["--force", "0.01", "--max-depth", "4"], "--max-depth 4 mm is beyond the 3 mm of tissue"),
+    (["--depth", "0.5", "--receptor-depths", "50"], "--receptor-depths 50 mm is not inside the 3 mm of tissue"),
+    (["--depth", "0:inf:1"], "finite"),
+    (["--depth", "0:1e12:1"], "1000000000001 values, more than the 100000"),
+    (["--depth", "0:3:1e-6"], "3000001 values"),
+    (["--depth", "0.5", "--sweep", "x=0:inf:1"], "finite"),
+    (["--depth", "0.5", "--receptor-depths", "1,nan"], "finite"),
+    (["--depth", "0:3:0.0001"], "30001 indentations, more than --max-indentations 10000"),
+    (["--depth", "0:1:0.01", "--sweep", "x=-1:1:0.01", "--max-indentations", "100"],
+     "20301 indentations, more than --max-indentations 100"),
+    (["--depth", "0.5", "--max-indentations", "0"], "--max-indentations"),
+])
+def test_indent_value_refusals(work, flags, pattern):
+    """Depths beyond the model's tissue and value lists that would overflow or run for hours:
+    refused before the model is factorised, naming the flag."""
+    assert_refused(["indent", work["model"], "--indentor", "C5", *flags, "--out", work["base"] / "o"],
+                   [work["base"]], pattern)
+
+
+def test_scene_file_messages_name_its_keys(work, tmp_path):
+    """An experiment from a --scene file names the file's keys, not the flags."""
+    scene = tmp_path / "s.toml"
+    scene.write_text('[[experiment]]\nindentor = "C5"\ndepth_mm = 30\n')
+    line = assert_refused(["indent", work["model"], "--scene", scene, "--out", work["base"] / "o"], [work["base"]],
+                          "depth_mm 30 mm is beyond the 3 mm")
+    assert "--depth" not in line
+    scene.write_text('max_indentations = 5\n[[experiment]]\nindentor = "C5"\ndepth_mm = "0.5:3:0.5"\n')
+    assert_refused(["indent", work["model"], "--scene", scene, "--out", work["base"] / "o"], [work["base"]],
+                   "6 indentations, more than max_indentations 5")
+
+
+def test_force_control_depth_limit_is_the_tissue(work, tmp_path):
+    """Without --max-depth, force control stops at the tissue over the bone (3 mm on cylinder8)."""
+    import json
+
+    out = tmp_path / "f"
+    assert cli("indent", work["model"], "--indentor", "C5", "--force", "0.002", "--out", out, "--quiet")[0] == 0
+    loading = json.loads((out / "run.json").read_text())["experiments"][0]["loading"]
+    assert loading["max_depth_mm"] == pytest.approx(3.0, abs=0.01)
+
+
+@pytest.mark.parametrize("argv, pattern", [
+    (["indent", "{model}", "--indentor", "C5", "--force", "1000"],
+     "--force 1000 N/mm is not reached within the 3 mm of tissue over the bone"),
+    (["indent", "{model}", "--indentor", "C5", "--force", "1000", "--max-depth", "2"],
+     "not reached within --max-depth 2 mm (the force there is"),
+    (["contact-series", "{model}", "--force", "100"], "--force 100 N/mm is not reached by C1"),
+])
+def test_force_not_reached_prints_only_its_line(work, argv, pattern):
+    """Found after factorising, before any bar: without --quiet the error line is all stderr has,
+    and the force there is a number, not a Python list."""
+    argv = [str(a).format(model=work["model"]) for a in argv]
+    before = snapshot(work["base"])
+    code, out, err, _ = cli(*argv, "--out", work["base"] / "o")
+    assert code == 2 and out == "", err
+    assert err.count("\n") == 1 and err.startswith("error: ") and pattern in err, err
+    assert "[" not in err and "Traceback" not in err
+    assert snapshot(work["base"]) == before
+
+
+def test_empty_out_is_refused_by_every_command(work, tmp_path, monkeypatch):
+    """`--out ""` would write into the current folder."""
+    monkeypatch.chdir(tmp_path)
+    commands = {**_commands(work, ""), "reproduce": ["reproduce", "--out", ""],
+                "render": ["render", "fingertip", "--out", ""], "reconstruct": ["reconstruct", "--out", ""],
+                "run": ["run", "--out", ""], "batch": ["batch", "preset:cylinder8", "--scene", "bars", "--out", ""]}
+    for argv in commands.values():
+        assert_refused(argv, [tmp_path, work["base"]], "--out is empty")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_prepare_refuses_a_read_only_model_folder(work, monkeypatch):
+    """prepare stores <model>/response/: a model folder it cannot write to is refused up front
+    (root writes anywhere, so the probe is made to fail)."""
+    import fingertip.staging
+
+    real = fingertip.staging._writable
+    monkeypatch.setattr(fingertip.staging, "_writable", lambda folder: real(folder) and folder != work["model"])
+    line = assert_refused(["prepare", work["model"]], [work["base"]], "is not writable")
+    assert str(work["model"]) in line and "response" not in line.split("not writable")[0]
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root may write anywhere")
+def test_prepare_refuses_a_read_only_model_folder_for_real(work):
+    work["model"].chmod(0o555)
+    try:
+        assert_refused(["prepare", work["model"]], [work["base"]], "is not writable")
+    finally:
+        work["model"].chmod(0o755)
+
+
+@pytest.mark.parametrize("argv, pattern", [
+    (["mesh", "--preset", "monkey", "--size", "1e9"],
+     "--size 1e+09 mm is larger than --coarse 3 mm (the default of 3D models); give --coarse at least as large "
+     "as --size"),
+    (["batch", "preset:cylinder8", "--scene", "bars", "--size", "1.5"],
+     "subject 'cylinder8': --size 1.5 mm is larger than --coarse 1 mm (the default of 2D models)"),
+    (["batch", "{file}", "--scene", "bars"], "is a file but not a sections.json"),
+    (["reconstruct", "{file}"], "is a file, not a folder"),
+    (["indent", "{file}", "--indentor", "C5", "--depth", "0.5"], "is a file"),
+    (["analyze", "{file}", "--neural", "{data}/synthetic_sa1_gratings.csv"], "is a file, not an indentation"),
+    (["contact-series", "{model}", "--depth", "30"], "--depth 30 mm is beyond the 3 mm of tissue"),
+])
+def test_messages_in_the_users_words(work, argv, pattern):
+    argv = [str(a).format(model=work["model"], file=work["file"], data=DATA) for a in argv]
+    line = assert_refused([*argv, "--out", work["base"] / "o"], [work["base"]], pattern)
+    assert "_mm" not in line.replace("sections.json", ""), line
+
+
+def test_output_folder_in_use_is_refused(work, tmp_path):
+    """A second command on a folder another one is writing: one line naming the pid."""
+    out = tmp_path / "run"
+    holder = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"])
+    try:
+        (tmp_path / ".run.lock").write_text(f"{holder.pid}\n")
+        line = assert_refused(["indent", work["model"], "--indentor", "C5", "--depth", "0.5", "--out", out],
+                              [work["base"]], f"is in use by another command (pid {holder.pid})")
+        assert line.startswith(f"error: --out {out} is in use")
+        assert not out.exists()
+    finally:
+        holder.kill()
+        holder.wait()
+    assert cli("indent", work["model"], "--indentor", "C5", "--depth", "0.5", "--out", out, "--quiet")[0] == 0
+    assert not (tmp_path / ".run.lock").exists()                        # the dead holder's lock: taken over
+
+
+def test_interrupted_reproduce_says_what_it_keeps(tmp_path, monkeypatch):
+    """Ctrl-C in `reproduce` keeps the claims done (a rerun resumes them): the message says so."""
+    import fingertip.cli.reproduce
+
+    out = tmp_path / "thesis"
+
+    def interrupted(folder, quick=False, progress=True):
+        (out / "claims").mkdir(parents=True)
+        for name in ("flamant", "cylinders"):
+            (out / "claims" / f"{name}.json").write_text("[]")
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(fingertip.cli.reproduce, "run_reproduce", interrupted)
+    code, _, err, _ = cli("reproduce", "--out", out, "--quick")
+    assert code == 130
+    assert err.strip().splitlines() == [f"error: interrupted; the 2 claims done are kept in {out} and a rerun "
+                                        f"resumes them"]
+    fresh = tmp_path / "fresh"
+    monkeypatch.setattr(fingertip.cli.reproduce, "run_reproduce", lambda *a, **k: (_ for _ in ()).throw(
+        KeyboardInterrupt))
+    code, _, err, _ = cli("reproduce", "--out", fresh)
+    assert code == 130 and err.strip() == "error: interrupted; nothing was written"
+
+
+@pytest.mark.slow
+def test_ctrl_c_while_factorising_acts_within_a_second(tmp_path):
+    """Ctrl-C while PARDISO factorises (monkey preset at 1 mm, 68k DOFs: several seconds of
+    factorisation) ends the command within about a second, with the one interrupt line; a depth
+    beyond the tissue over the bone (2.7 mm here) is refused before the factorisation."""
+    import select
+
+    model = tmp_path / "monkey"
+    assert cli("mesh", "--preset", "monkey", "--size", "1.0", "--out", model, "--quiet").code == 0
+    assert_refused(["indent", model, "--indentor", "C5", "--depth", "40", "--out", tmp_path / "o"], [tmp_path],
+                   "--depth 40 mm is beyond the 2.66 mm of tissue over the bone")
+    out = tmp_path / "run"
+    proc = subprocess.Popen([sys.executable, str(ROOT / "pipeline.py"), "indent", str(model), "--indentor", "C5",
+                             "--depth", "1", "--no-pvd", "--out", str(out)], cwd=ROOT, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE)
+    seen, deadline = b"", time.monotonic() + 120
+    while b"factorising" not in seen and time.monotonic() < deadline and proc.poll() is None:
+        if select.select([proc.stderr], [], [], 1.0)[0]:
+            seen += os.read(proc.stderr.fileno(), 4096)
+    assert b"factorising" in seen, seen                      # its task line shows from its first second on
+    time.sleep(0.5)
+    t0 = time.perf_counter()
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    seconds = time.perf_counter() - t0
+    assert proc.returncode == 130, err
+    assert err.decode().strip().splitlines()[-1] == "error: interrupted; nothing was written"
+    assert seconds < 1.5, seconds                            # it took 4-21 s while PARDISO ran on
+    assert not out.exists() and not [p for p in tmp_path.iterdir() if p.name.startswith(".")]

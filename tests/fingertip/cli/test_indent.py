@@ -198,7 +198,7 @@ def test_receptor_site_column_and_run_json(cyl8, tmp_path):
     assert c3["orientation"] == "parallel" and c3["sweep"] == {"axis": "x", "offsets_mm": [-1, -0.5, 0, 0.5, 1]}
     assert c3["loading"] == {"depth_mm": [0.5]} and c3["approach"] == [0.0, -1.0, 0.0]
     assert bar["sweep"] is None and bar["diameter_mm"] is None and bar["shapes"][0]["width_mm"] == 1.5
-    assert bar["loading"] == {"force_N": 0.002, "equal_force": False, "max_depth_mm": 5.0}
+    assert bar["loading"] == {"force_N": 0.002, "equal_force": False, "max_depth_mm": 3.0}   # the tissue over the bone
 
 
 def test_scene_position_top_and_bad_position(cyl8, tmp_path, capsys):
@@ -220,3 +220,32 @@ def test_scene_position_top_and_bad_position(cyl8, tmp_path, capsys):
                           "--quiet"]) == 2
     err = capsys.readouterr().err.strip()
     assert 'position_mm "centre"' in err and "\n" not in err and not (tmp_path / "b").exists()
+
+
+def test_rerun_replaces_the_run_folder_as_a_whole(cyl8, tmp_path, capsys):
+    """A rerun with fewer steps leaves no file of the earlier run (C5_001-003.vtu, its figures);
+    a folder holding other files is refused, and a mesh folder keeps what else it holds."""
+    out = tmp_path / "run"
+    args = ["indent", str(cyl8), "--indentor", "C5", "--out", str(out), "--quiet"]
+    assert pipeline.main([*args, "--depth", "0.5:2:0.5"]) == 0
+    assert (out / "C5_003.vtu").is_file()
+    assert pipeline.main([*args, "--depth", "0.5", "--no-plots"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["C5.csv", "C5.pvd", "C5_000.vtu", "C5_receptors.csv",
+                                                     "C5_surface.csv", "run.json"]
+    assert len(csv_rows(out / "C5.csv")) == 1
+    assert not [p for p in tmp_path.iterdir() if p.name != "run"]             # no staging, no lock left
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "notes.txt").write_text("keep me")
+    capsys.readouterr()
+    for argv in ([*args[:-3], "--depth", "0.5", "--out", str(mine)], ["line-load", str(cyl8), "--out", str(mine)],
+                 ["analyze", str(out), "--neural", str(ROOT / "data" / "synthetic_sa1_gratings.csv"), "--out",
+                  str(mine)]):
+        assert pipeline.main(argv) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and f"--out {mine} holds files that are not an earlier" in err, err
+    assert [p.name for p in mine.iterdir()] == ["notes.txt"]
+    load = tmp_path / "load"                          # another command's own folder: replaced on a rerun too
+    for depths in ("0.5,1", "0.5"):
+        assert pipeline.main(["line-load", str(cyl8), "--depth", depths, "--out", str(load), "--quiet"]) == 0
+    assert {float(r["depth_mm"]) for r in csv_rows(load / "line_load.csv")} == {0.5}
