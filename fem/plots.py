@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 from matplotlib.figure import Figure
-from matplotlib.ticker import MaxNLocator, ScalarFormatter
+from matplotlib.ticker import FuncFormatter, MaxNLocator, ScalarFormatter
 
 from fem.io.runfolder import pad3
 from fem.receptors.analysis import model_values
@@ -15,10 +15,23 @@ from fem.receptors.analysis import model_values
 
 def save(fig: Figure, path, dpi: int = 110) -> None:
     """Lay out and write a figure (PNG by the path's suffix): constrained layout unless the figure
-    chose one, so labels, titles and colour bars stay inside the canvas."""
+    chose one, so labels, titles and colour bars stay inside the canvas; every linear axis labels
+    its ticks with plain numbers (`plain_numbers`)."""
     if fig.get_layout_engine() is None:
         fig.set_layout_engine("constrained")
+    plain_numbers(fig)
     fig.savefig(path, dpi=dpi)
+
+
+def plain_numbers(fig: Figure) -> Figure:
+    """Tick labels as the numbers themselves, to 4 significant digits (2.5e-05, 0.9999, 1.2e+04),
+    on every linear axis of the figure: never an offset or a shared multiplier beside the axis,
+    which a reader misses ("1e-6+9.9992e-1")."""
+    for ax in fig.axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            if axis.get_scale() == "linear":
+                axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:.4g}" if v != 0 else "0"))
+    return fig
 
 
 UNITS = {"MPa": "MPa", "mm": "mm", "N": "N", "mm2": "mm$^2$", "Nmm": "N mm", "deg": "deg"}
@@ -68,14 +81,18 @@ def indent_force_figure(name: str, key: str, x, force_N, max_pressure_MPa, dim: 
     return fig
 
 
-def indent_profile_figure(name: str, across_mm, results) -> Figure:
+def indent_profile_figure(name: str, across_mm, results, dim: int = 3) -> Figure:
     """Surface deflection and pressure across the indentor: across_mm (n,) positions of the
-    chosen surface nodes, in order; results: [(label, deflection (n,) mm, pressure (n,) MPa)]."""
+    chosen surface nodes, in order; results: [(label, deflection (n,) mm, pressure (n,) MPa)]. In
+    3D the nodes of a band along the indentor's centre line are drawn as points (their distances
+    along the indentor differ, so a line through them would zigzag); in 2D as lines."""
     fig = Figure(figsize=(8, 6))
     ax = fig.subplots(2, 1, sharex=True)
-    for label, deflection, pressure in results:
-        ax[0].plot(across_mm, -deflection, label=label)
-        ax[1].plot(across_mm, pressure)
+    style = dict(marker=".", ms=3, ls="none") if dim == 3 else {}
+    for k, (label, deflection, pressure) in enumerate(results):
+        colour = f"C{k % 10}"
+        ax[0].plot(across_mm, -deflection, label=label, color=colour, **style)
+        ax[1].plot(across_mm, pressure, color=colour, **style)
     ax[0].set(ylabel="surface displacement, mm", title=f"{name}: surface profile (displacement along the "
                                                           "approach, down negative)")
     ax[0].legend(fontsize=7, title="depth", title_fontsize=7)
@@ -175,7 +192,7 @@ def indent_figures(run, scene_run, tables) -> dict[str, Figure]:
     order = np.argsort(v[near])
     shown = [(f"{steps[i][1].depth_mm.max():.2f} mm", steps[i][1].deflection_mm[near][order],
               steps[i][1].pressure_MPa[near][order]) for i in profile_steps(run, sweep)]
-    figures[f"{name}_profile.png"] = indent_profile_figure(name, v[near][order], shown)
+    figures[f"{name}_profile.png"] = indent_profile_figure(name, v[near][order], shown, dim)
     # receptor measures: profile along the sites (judged step) or against the sweep position
     g = scene_run.sampler.grid
     j = judged_step(run)

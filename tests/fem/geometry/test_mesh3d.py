@@ -240,28 +240,6 @@ def test_bar_along_the_axis_presses_the_skin_of_the_proximal_cut(built, tmp_path
     assert float(rows[-1].split(",")[4]) > 0                 # force_N at 1 mm
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("scene", ["bars", "cylinders", "cylinder_deformation", "line_load", "steps",
-                                   "force_displacement"])
-def test_3d_scenes_run_on_the_preset(built, tmp_path, scene):
-    """Every shipped 3D scene runs on the monkey preset (until the proximal cut's skin was freed,
-    bars, cylinders, line_load and steps stopped at its held rim); all KKT checks pass."""
-    from dataclasses import replace
-
-    from fem.experiments.scene import Output, load_scene
-    from fingertip.jobs.indent import indent_folder
-
-    spec = replace(load_scene(ROOT / "scenes" / f"{scene}.toml"),
-                   output=Output(plots=False, pvd=False))
-    indent_folder(built[0], tmp_path / scene, spec, progress=False)
-    for name in [e.name for e in spec.experiments]:
-        text = (tmp_path / scene / f"{name}.csv").read_text().splitlines()
-        header = text[0].split(",")
-        rows = [dict(zip(header, r.split(","))) for r in text[1:]]
-        assert rows and all(r["kkt_ok"] == "True" for r in rows), name
-        assert max(float(r["force_N"]) for r in rows) > 0, name
-
-
 def test_top_on_a_flat_cut_rim_is_warned_about(built, tmp_path, capsys):
     """Tilted distal end up, a flat-ended finger's highest point is its distal cut's rim: aiming at
     "top" there says so (and how to get the pad: a rounded tip)."""
