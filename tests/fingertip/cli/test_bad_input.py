@@ -226,6 +226,8 @@ def test_interrupt_while_meshing(tmp_path, sig, code):
     assert seconds < 5
     assert not out.exists() and not list(tmp_path.glob(".m.partial-*"))
     assert not list((tmp_path / "cache").rglob("*.npz"))
+    if sig != signal.SIGINT:                        # one re-run shows the cache was left clean
+        return
     done = subprocess.run([sys.executable, str(ROOT / "pipeline.py"), *map(str, argv)], cwd=ROOT, env=env,
                           capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
