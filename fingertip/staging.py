@@ -20,6 +20,7 @@ import functools
 import inspect
 import json
 import os
+import secrets
 import shutil
 import tempfile
 from pathlib import Path
@@ -251,12 +252,17 @@ def atomic_write(path: str | os.PathLike, write) -> None:
     """Call write(tmp_path) on a temporary name beside `path`, then rename it to `path`.
 
     The temporary name is unique (an empty file made for it), so concurrent writers of one path
-    never share it: readers see the old file or a whole new one."""
+    never share it: readers see the old file or a whole new one. The file gets the mode a plain
+    open() would give it (0666 less the umask: 0644 typically), not tempfile's 0600."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=f".partial{path.suffix}", dir=path.parent)
-    os.close(fd)
-    tmp = Path(name)
+    while True:
+        tmp = path.parent / f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.partial{path.suffix}"
+        try:
+            os.close(os.open(tmp, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o666))
+            break
+        except FileExistsError:
+            continue
     try:
         write(tmp)
         os.replace(tmp, path)
@@ -265,8 +271,5 @@ def atomic_write(path: str | os.PathLike, write) -> None:
 
 
 def write_json(path: str | os.PathLike, data) -> None:
-    """Write JSON atomically (temporary name, then rename)."""
-    path = Path(path)
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(data, indent=1))
-    os.replace(tmp, path)
+    """Write JSON atomically (`atomic_write`)."""
+    atomic_write(path, lambda tmp: Path(tmp).write_text(json.dumps(data, indent=1)))

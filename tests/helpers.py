@@ -8,6 +8,7 @@ import contextlib
 import csv
 import io
 import json
+import signal
 import time
 from pathlib import Path
 from typing import NamedTuple
@@ -74,3 +75,10 @@ def write_sections(folder, polys, zs=None) -> Path:
 def by_key(findings) -> dict:
     """Thesis findings by their key."""
     return {f.key: f for f in findings}
+
+
+def default_sigint() -> None:
+    """preexec_fn for a child that must see Ctrl-C: a test run started in the background of a
+    non-interactive shell ignores SIGINT, and a Python started with it ignored never raises
+    KeyboardInterrupt."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)

@@ -61,7 +61,7 @@ def _run(folder, scene):
 @pytest.mark.parametrize("name", SCENES_3D)
 def test_3d_scene_on_the_monkey_preset_and_its_figures(shop, name, tmp_path):
     scene = load_scene(name)
-    folder = shop.preset("monkey")
+    folder = shop.preset("monkey", 1.5)                      # coarse: what is tested is the scene and its figures
     if name == "cylinder_deformation":         # a human scene to 3 mm: the monkey has 2.66 mm over its bone
         with pytest.raises(InputError, match="beyond the 2.66 mm of tissue over the bone"):
             run_scene(folder, scene)

@@ -17,7 +17,7 @@ from fem.geometry.mesh3d import (
     tet_volumes,
 )
 from fingertip.errors import InputError
-from tests.helpers import ROOT, write_sections
+from tests.helpers import write_sections
 
 ARGS = ["mesh", "--preset", "monkey", "--size", "0.8", "--quiet"]
 

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import pipeline
-from tests.helpers import ROOT, cli, snapshot
+from tests.helpers import default_sigint, ROOT, cli, snapshot
 
 DATA = ROOT / "data"
 REFUSAL_S = 2.0          # the bound on a refusal: no meshing or factorising before it
@@ -204,6 +204,7 @@ def test_internal_error_is_one_line(monkeypatch, tmp_path):
 
 def _interrupt(argv, env, sig, after_s):
     proc = subprocess.Popen([sys.executable, str(ROOT / "pipeline.py"), *map(str, argv)], cwd=ROOT, env=env,
+                            preexec_fn=default_sigint,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     time.sleep(after_s)
     t0 = time.perf_counter()
@@ -401,7 +402,7 @@ def test_ctrl_c_while_factorising_acts_within_a_second(tmp_path):
     out = tmp_path / "run"
     proc = subprocess.Popen([sys.executable, str(ROOT / "pipeline.py"), "indent", str(model), "--indentor", "C5",
                              "--depth", "1", "--no-pvd", "--out", str(out)], cwd=ROOT, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE)
+                            stderr=subprocess.PIPE, preexec_fn=default_sigint)
     seen, deadline = b"", time.monotonic() + 120
     while b"factorising" not in seen and time.monotonic() < deadline and proc.poll() is None:
         if select.select([proc.stderr], [], [], 1.0)[0]:
