@@ -22,6 +22,9 @@ STRAIN_COMPONENTS = {3: ("xx", "yy", "zz", "yz", "xz", "xy"), 2: ("xx", "yy", "x
 #: stress components returned by stress_operator (plane strain has sigma_zz)
 STRESS_COMPONENTS = {3: ("xx", "yy", "zz", "yz", "xz", "xy"), 2: ("xx", "yy", "zz", "xy")}
 _INDEX = {"x": 0, "y": 1, "z": 2}
+JACOBIAN_CHUNK = 100000
+"""Elements times displacement fields per block of `centroid_jacobians` (3D: 24 MB of element
+displacements a block)."""
 
 
 class PointLocator:
@@ -130,6 +133,25 @@ def point_operator(m, x, cells, quantity) -> sp.csr_matrix:
     hooke = sp.csr_matrix((M.ravel(), ((k * len(out) + a).ravel(), (k * ncomp + c).ravel())),
                           shape=(n * len(out), n * ncomp))
     return (hooke @ strain).tocsr()
+
+
+def centroid_jacobians(m, u) -> np.ndarray:
+    """det F at each element's centroid of model m (a `fem.core.model.Model`) for displacements u
+    (ndof,) -> (M,), or (ndof, k) -> (M, k): F = I + grad u, the deformation gradient of linear
+    kinematics (plane strain: its in-plane block). det F <= 0 where the displacement turns an
+    element inside out: there a small-strain result has lost its meaning. The P2 shape gradients
+    at the reference centroid are mapped by each element's affine map (no point location)."""
+    U = np.asarray(u, float).reshape(m.ndof, -1)
+    d, M, basis = m.dim, m.mesh.nelements, m.scalar_basis
+    centre = np.full((d, 1), 1.0 / (d + 1))
+    ref = np.array([np.asarray(basis.elem.lbasis(centre, a)[1])[:, 0] for a in range(basis.Nbfun)])   # (nb, d)
+    A_inv = m.locator._Ainv                                                  # (M, d, d): x -> reference
+    out = np.empty((M, U.shape[1]))
+    for cells in np.array_split(np.arange(M), max(1, M * U.shape[1] // JACOBIAN_CHUNK)):
+        ue = U[m.element_dofs[:, cells]].reshape(len(ref), d, len(cells), -1)          # (nb, d, n, k)
+        grad = np.einsum("aink,al,nlj->nkij", ue, ref, A_inv[cells], optimize=True)    # grad u (n, k, d, d)
+        out[cells] = np.linalg.det(np.eye(d) + grad)
+    return out if np.ndim(u) > 1 else out[:, 0]
 
 
 class Solution:

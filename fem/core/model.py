@@ -71,7 +71,7 @@ from skfem.helpers import dot
 from fem.core.discretisation import Discretisation, SurfaceNodes
 from fem.core.fields import Solution, point_operator
 from fem.core.linalg import SaddleFactor
-from fem.core.materials import DEFAULT_CODE, DEFAULT_NU, Material
+from fem.core.materials import DEFAULT_NU, Material, default_code
 from fem.core.system import LinearSystem, condense_plan
 from fingertip.errors import InputError
 
@@ -94,7 +94,9 @@ class Model:
     Parameters
     ----------
     points, cells, layer, regions : the mesh (`fem.core.discretisation.Discretisation`).
-    material : `mABCDE` code, moduli [MPa] per layer (mapping or sequence), or a `Material`.
+    material : `mABCDE` code, moduli [MPa] per layer (mapping or sequence), or a `Material`; a
+        code or sequence has one value per layer 1 to the mesh's highest solid layer (InputError
+        otherwise). None: `fem.core.materials.default_code` of the mesh's layers ("m3" for one layer).
     nu : Poisson ratio in [0, 0.4999] (ignored when `material` is a `Material`).
     rigid_bone : treat layer 5 as rigid (its nodes fixed) instead of elastic.
 
@@ -103,19 +105,19 @@ class Model:
     on the material (moduli, K_dev, the factorisations) is the model's own.
     """
 
-    def __init__(self, points, cells, layer, regions=None, material=DEFAULT_CODE, nu=DEFAULT_NU,
+    def __init__(self, points, cells, layer, regions=None, material=None, nu=DEFAULT_NU,
                  rigid_bone=False):
         self._setup(Discretisation(points, cells, layer, regions), material, nu, rigid_bone)
 
     @classmethod
-    def on(cls, discretisation: Discretisation, material=DEFAULT_CODE, nu=DEFAULT_NU, rigid_bone=False) -> Model:
+    def on(cls, discretisation: Discretisation, material=None, nu=DEFAULT_NU, rigid_bone=False) -> Model:
         """A model of `discretisation` with this material (arguments as the constructor's)."""
         model = object.__new__(cls)
         model._setup(discretisation, material, nu, rigid_bone)
         return model
 
     @classmethod
-    def from_mesh(cls, path, material=DEFAULT_CODE, nu=DEFAULT_NU, rigid_bone=False) -> Model:
+    def from_mesh(cls, path, material=None, nu=DEFAULT_NU, rigid_bone=False) -> Model:
         """A model of the mesh in `mesh.vtu` (`Discretisation.from_mesh`)."""
         return cls.on(Discretisation.from_mesh(path), material, nu, rigid_bone)
 
@@ -127,6 +129,8 @@ class Model:
 
     def _setup(self, discretisation, material, nu, rigid_bone) -> None:
         self.discretisation = discretisation
+        if material is None:
+            material = default_code(discretisation.layer)
         self.material = material if isinstance(material, Material) else Material(material, nu, rigid_bone=rigid_bone)
         self.mu, self.lam = self.material.lame(discretisation.layer)
         self._factors: dict = {}

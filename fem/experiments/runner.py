@@ -15,6 +15,7 @@ through a given `fem.experiments.response.ResponseStore`.
 from __future__ import annotations
 
 import dataclasses
+import logging
 import time
 from dataclasses import dataclass, field
 
@@ -22,6 +23,8 @@ import numpy as np
 
 from fem.contact.indentors import approach_direction, make_indentor
 from fem.contact.linear import MAX_DEPTH_MM, ContactModel, reach, tissue_mm
+from fem.core.fields import centroid_jacobians
+from fem.core.materials import FLUID_LAYER
 from fem.experiments.response import ResponseStore, contact_model, stored_responses
 from fem.experiments.scene import AXES, Experiment, Receptors, Scene, line_text
 from fem.io.modelfolder import (
@@ -40,6 +43,20 @@ from fem.receptors.grid import ReceptorSampler, receptor_grid
 from fingertip.errors import InputError
 from fingertip.progress import as_progress
 
+logger = logging.getLogger(__name__)
+
+MAX_LINEAR_STRAIN = 0.2
+"""Largest strain magnitude (max |principal strain|) at a receptor point within which a linear
+(small-strain) result is taken at its word. The linear strain drops the quadratic term of the
+Green-Lagrange strain, whose share grows with the strain itself (about half of it at 0.2 in simple
+shear), and the contact is solved on the undeformed surface: beyond it `linear_validity` warns."""
+MAX_INVERTED_FRACTION = 0.0
+"""Fraction of the elements that the linear displacement may turn inside out (det(I + grad u) <= 0
+at the centroid) before `linear_validity` warns: none, since such a displacement is no deformation
+a body can take."""
+LARGE_DEFORMATION = "large-deformation contact is not implemented yet"
+"""What a warning of `validity_warning` points to beyond the linear range."""
+
 
 @dataclass
 class ExperimentRun:
@@ -51,6 +68,7 @@ class ExperimentRun:
     steps: list = field(default_factory=list)
     seconds: float = 0.0
     tissue_mm: float = float("inf")     # the tissue over the bone along its approach (`tissue_limit_mm`)
+    validity: dict | None = None        # the linear result's range (`linear_validity`), run.json's "validity"
 
     @property
     def name(self) -> str:
@@ -214,9 +232,57 @@ def run_experiments(model, info, scene: Scene, progress=None, store=None, only: 
             if system is not None:    # an experiment's numbers do not depend on those before it:
                 system.restart_refinement()             # the serial run writes its tasks' bytes
             cm.observe_pending()      # one block per experiment, as a task of `run_experiment` does
+            run.validity = linear_validity(run, sampler, cm if system is not None else None, model)
+            if system is not None:
+                system.restart_refinement()
             cm.restart()
         run.seconds += time.perf_counter() - t0
     return SceneRun(model, info, scene, cm, sn, grid, sampler, list(rc.measures), line, runs, warnings, used)
+
+
+def linear_validity(run: ExperimentRun, sampler: ReceptorSampler, cm: ContactModel | None, model) -> dict:
+    """Whether an experiment's linear results are within their range (run.json's "validity"): the
+    largest receptor strain (max |principal strain| over its points and indentations, against
+    MAX_LINEAR_STRAIN), and the fraction of the elements (the fluid core's aside) that the
+    displacement of its deepest indentation (`checked_indentation`; the largest force among equal
+    depths) turns inside out (`fem.core.fields.centroid_jacobians` <= 0, against
+    MAX_INVERTED_FRACTION). The full field takes one solve with the factorised contact model `cm`;
+    None (a stored response model answered) leaves the inversion unchecked (null)."""
+    steps = [res for _, res in run.steps]
+    strain = [float(np.abs(sampler.state(r.observed).principal_strain).max(initial=0.0)) for r in steps]
+    worst = int(np.argmax(strain))
+    deepest = max(range(len(steps)), key=lambda i: (float(steps[i].depth_mm.max()), steps[i].total_force_N))
+    inverted = None
+    if cm is not None:
+        u = cm.compliance(run.indentor.approach).displacement(steps[deepest].force_N)
+        solid = model.layer != FLUID_LAYER
+        inverted = float(np.mean(centroid_jacobians(model, u)[solid] <= 0))
+    linear = strain[worst] <= MAX_LINEAR_STRAIN and (inverted is None or inverted <= MAX_INVERTED_FRACTION)
+    return {"checked_indentation": deepest, "depth_mm": float(steps[deepest].depth_mm.max()),
+            "inverted_elements": inverted, "inversion_checked": inverted is not None,
+            "max_receptor_strain": strain[worst], "max_receptor_strain_indentation": worst,
+            "max_linear_strain": MAX_LINEAR_STRAIN, "max_inverted_fraction": MAX_INVERTED_FRACTION,
+            "within_linear_range": bool(linear)}
+
+
+def validity_warning(run: ExperimentRun) -> str | None:
+    """The warning of an experiment whose linear results leave their range (`linear_validity`), or
+    None: "C5 at 3 mm: the linear displacement inverts 4.1 % of the elements and strains receptors
+    by 0.48 (> 0.2): small-strain results are out of their range here; ..."."""
+    v = run.validity
+    if v is None or v["within_linear_range"]:
+        return None
+    inverts = v["inverted_elements"] is not None and v["inverted_elements"] > v["max_inverted_fraction"]
+    strains = v["max_receptor_strain"] > v["max_linear_strain"]
+    what = [f"inverts {100 * v['inverted_elements']:.2g} % of the elements"] if inverts else []
+    if strains:
+        what.append(f"strains receptors by {v['max_receptor_strain']:.2f} (> {v['max_linear_strain']:g})")
+    else:
+        what[0] += f" (receptor strains up to {v['max_receptor_strain']:.2f})"
+    unchecked = "" if v["inversion_checked"] else (" (element inversion not checked: a stored response model "
+                                                   "has no full displacement field)")
+    return (f"{run.name} at {v['depth_mm']:.3g} mm: the linear displacement {' and '.join(what)}{unchecked}: "
+            f"small-strain results are out of their range here; {LARGE_DEFORMATION}")
 
 
 def _plan(model, info, scene: Scene):
@@ -321,6 +387,9 @@ def run_scene(model_dir, scene: Scene, store=None, map=None, progress=None) -> S
         run = assemble_run(model, info, scene, runs, progress)
     else:
         run = run_experiments(model, info, scene, progress=progress, store=store)
+    for e in run.experiments:
+        if (warning := validity_warning(e)) is not None:
+            logger.warning(warning)
     if scene.afferents is not None:
         with progress.task("afferent inputs and spike trains", kind="afferents"):
             run.afferents = scene_responses(run)

@@ -11,7 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-from fem.core.materials import DEFAULT_CODE, DEFAULT_NU
+from fem.core.discretisation import Discretisation
+from fem.core.materials import DEFAULT_CODE, DEFAULT_NU, RECORDED_CODES, Material, default_code, solid_layers
 from fem.core.model import Model
 from fingertip.errors import InputError
 from fingertip.progress import as_progress
@@ -33,14 +34,23 @@ CONDENSE_MAX_NODES = 8000
 """Largest candidate set whose dense compliance `factorise` stores (8000 nodes: 0.5 GB, k^3 flops)."""
 
 def read_model(model_dir, material=None, nu=None):
-    """(fem.core.model.Model, model.json dict) of a model folder; material and nu default to model.json's.
+    """(fem.core.model.Model, model.json dict) of a model folder; material and nu default to model.json's
+    (`folder_material` of the mesh's layers). InputError, before anything is assembled, for a
+    material that does not fit the mesh's layers (`fem.core.materials.Material.check_layers`).
 
     A 3D model with a `proximal` cut gets the region `proximal_core`: the cut's vertices outside
     the skin layers (SKIN_LAYERS), which HELD fixes."""
     folder = Path(model_dir)
     info = folder_info(folder)
-    own_material, own_nu = folder_material(info)
-    model = Model.from_mesh(folder / "mesh.vtu", material=material or own_material, nu=own_nu if nu is None else nu)
+    disc = Discretisation.from_mesh(folder / "mesh.vtu")
+    own_material, own_nu = folder_material(info, disc.layer)
+    if not material:
+        try:
+            Material(own_material).check_layers(disc.layer)
+        except InputError as exc:
+            raise InputError(f"{folder / 'model.json'} records a material that does not fit its mesh ({exc}): give "
+                             f"a material or re-run `pipeline.py mesh`") from None
+    model = Model.on(disc, material=material or own_material, nu=own_nu if nu is None else nu)
     if "proximal" in model.regions and "proximal_core" not in model.regions:
         skin = np.zeros(model.mesh.nvertices, bool)
         skin[model.mesh.t[:, np.isin(model.layer, SKIN_LAYERS)].ravel()] = True
@@ -74,10 +84,47 @@ def folder_info(model_dir) -> dict:
     return info
 
 
-def folder_material(info: dict) -> tuple[str, float]:
-    """(material code, nu) a model folder's model.json records (`folder_info`; the defaults of
-    fem.core.materials when it names none)."""
-    return info.get("material", DEFAULT_CODE), info.get("nu", DEFAULT_NU)
+def folder_material(info: dict, layers=None) -> tuple[str, float]:
+    """(material code, nu) of a model folder from its model.json (`folder_info`): the code it
+    records, fitted to the model's layers (ids or the mesh's (M,) layer array; default: those
+    model.json lists, `folder_layers`): where it names no material, or one of RECORDED_CODES that
+    does not fit them (a one-layer 2D model recorded "m33338"), `fem.core.materials.default_code`
+    of the layers ("m3"). nu defaults to fem.core.materials.DEFAULT_NU."""
+    layers = folder_layers(info) if layers is None else solid_layers(layers)
+    code = info.get("material")
+    if layers and (code is None or (code in RECORDED_CODES and not fits(code, layers))):
+        code = default_code(layers)
+    return code or DEFAULT_CODE, info.get("nu", DEFAULT_NU)
+
+
+def fits(material, layers) -> bool:
+    """Whether a material (code, moduli or `Material`) fits a model with these layer ids
+    (`fem.core.materials.Material.check_layers`)."""
+    try:
+        Material(material).check_layers(layers)
+    except InputError:
+        return False
+    return True
+
+
+def folder_layers(info: dict) -> list[int]:
+    """The solid layer ids model.json lists (`layers`: a list in 2D, {id: tissue} in 3D); [] when it
+    lists none (the mesh knows: `read_model`)."""
+    listed = info.get("layers")
+    try:
+        return solid_layers(listed.keys() if isinstance(listed, dict) else listed or [])
+    except (TypeError, ValueError):
+        return []
+
+
+def check_folder_material(model_dir, material=None, nu=None) -> None:
+    """InputError when a material (a scene's, None: the folder's own) does not fit the layers the
+    model folder's model.json lists: the check `read_model` makes on the mesh, made before any
+    work (the mesh is not read; a model.json that lists no layers is checked when it is)."""
+    info = folder_info(model_dir)
+    layers = folder_layers(info)
+    if layers and material is not None:
+        Material(material, DEFAULT_NU if nu is None else nu).check_layers(layers)
 
 
 def folder_dim(info: dict) -> int:

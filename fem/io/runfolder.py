@@ -37,7 +37,8 @@ RECEPTOR_COLUMNS = ("step", "site", "x_mm", "y_mm", "z_mm", "depth_mm")
 # --------------------------------------------------------------------------- run.json
 def experiment_record(run) -> dict:
     """run.json entry of one experiment (fem.experiments.runner.ExperimentRun): indentor (code, shapes,
-    diameter where it has one), placement, sweep axis and offsets (mm), loading."""
+    diameter where it has one), placement, sweep axis and offsets (mm), loading, and whether its
+    linear results are within their range (`validity`, fem.experiments.runner.linear_validity)."""
     exp, place, ind = run.experiment, run.placement, run.indentor
     shapes = [{"shape": type(p).__name__, **{k: (None if v == np.inf else v) for k, v in asdict(p).items()}}
               for p in ind.parts]
@@ -59,6 +60,7 @@ def experiment_record(run) -> dict:
             "length_axis": ind.e1.tolist(), "origin_mm": ind.origin_mm.tolist(),
             "sweep": None if axis is None else {"axis": "xyz"[axis], "offsets_mm": offsets[:, axis].tolist()},
             "loading": loading, "indentations": len(exp.indentations),
+            "validity": getattr(run, "validity", None),
             "files": [f"{exp.name}.csv", f"{exp.name}_surface.csv", f"{exp.name}_receptors.csv"]}
 
 

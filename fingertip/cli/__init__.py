@@ -57,6 +57,9 @@ DEBUG_ENV = "FINGERTIP_DEBUG"
 """Environment variable: when set (non-empty), an internal error also prints its traceback."""
 LOGGERS = ("fem", "fingertip", "reconstruct")
 """The packages whose log warnings the command line prints as `warning: ...` lines on stderr."""
+WORD_FLAGS = ("material",)
+"""Parameters named by a plain word in messages ("material m433310 has 6 digits ..."): rewritten
+into their flag (--material) only when the flag was given, since the word has other uses."""
 
 
 def build_parser(prog: str = "pipeline.py", command: str | None = None) -> Parser:
@@ -77,11 +80,12 @@ def flag_table(parser, args=None) -> dict[str, str]:
     """{field name: flag} of a subcommand's parser: the parameter names (argparse dests with an
     underscore, e.g. size_mm) whose values its flags give (--size). With args (the parsed
     namespace), a field the command reads from its --scene file (`from_scene`) counts only when
-    its flag was given."""
+    its flag was given; a word of WORD_FLAGS counts only when its flag was given."""
     from_scene = set(getattr(args, "from_scene", ())) if getattr(args, "scene", None) else set()
     table = {}
     for action in parser._actions:
-        if not action.option_strings or "_" not in action.dest:
+        given = action.dest in WORD_FLAGS and getattr(args, action.dest, None) not in (None, UNSET)
+        if not action.option_strings or ("_" not in action.dest and not given):
             continue
         if action.dest in from_scene and getattr(args, action.dest, UNSET) is UNSET:
             continue

@@ -24,7 +24,7 @@ from fem.biomech.fit import fit_force_scale, fit_material, profile_residuals
 from fem.biomech.line_load import compare_line_load
 from fem.biomech.measured import read_deflection_csv, read_force_csv
 from fem.contact.indentors import orientation_deg, shapes_for
-from fem.io.modelfolder import folder_info, folder_material
+from fem.io.modelfolder import check_folder_material, folder_info, folder_material
 from fingertip.distribute import parse_scheduler, require_dask
 from fingertip.errors import InputError
 from fingertip.jobs.tasks import task_map
@@ -227,7 +227,7 @@ def run_line_load(model_dir, out_dir, depths=(0.05, 0.5, 1.0, 2.0), material=Non
     depth_list = list(depths)
     info = folder_info(model_dir)
     material = material or folder_material(info)[0]
-    parse_code(material)
+    check_folder_material(model_dir, material, nu)
     c = compare_line_load(model_dir, depth_list, material=material, nu=nu, half_width_mm=half_width_mm,
                           step_mm=step_mm, position_mm=position_mm, slip=slip, half_length_mm=half_length_mm,
                           large_deformation=large_deformation, progress=progress)

@@ -14,9 +14,9 @@ from pathlib import Path
 import numpy as np
 
 from fem.experiments.response import ResponseStore
-from fem.experiments.runner import prepare_responses, run_scene
+from fem.experiments.runner import prepare_responses, run_scene, validity_warning
 from fem.experiments.scene import Receptors, Scene
-from fem.io.modelfolder import folder_info
+from fem.io.modelfolder import check_folder_material, folder_info
 from fem.io.runfolder import write_run
 from fingertip.distribute import parse_scheduler, require_dask
 from fingertip.jobs.tasks import task_map
@@ -51,6 +51,7 @@ def run_indent(model_dir, out_dir, scene: Scene, progress=True, scheduler=None) 
     """`indent_folder`, returning the tables it wrote with the summary."""
     t_start = time.perf_counter()
     check_output_dir(out_dir, marker=RUN_MARKER, what="indent run")
+    check_folder_material(model_dir, scene.material, scene.nu)
     sched = parse_scheduler(scheduler)
     require_dask(sched)
     progress = as_progress(progress)
@@ -65,6 +66,7 @@ def run_indent(model_dir, out_dir, scene: Scene, progress=True, scheduler=None) 
     lines = [(f"indentation results in {out_dir} ({total:.1f} s; model {model.ndof} DOFs, "
               f"{len(run.surface.nodes)} contact candidates, {len(run.grid.points_mm)} receptor points)")]
     lines += [experiment_line(e, model.dim) for e in run.experiments]
+    lines += validity_lines(run.experiments)
     lines += [afferent_line(name, resp) for name, resp in run.afferents[1].items()]
     lines += [f"  response model: {how} {key} ({size / 2**20:.1f} MB, built in {built:.2f} s)"
               for key, how, built, size in run.responses]
@@ -112,6 +114,20 @@ def afferent_line(name: str, resp) -> str:
     parts = [f"{(cls == c).sum()} {c} ({int((rate[cls == c] > 0).sum())} fired, mean {rate[cls == c].mean():.1f} Hz)"
              for c in dict.fromkeys(cls)]
     return f"  {name} afferents: " + ", ".join(parts) + f" over {resp.duration_s:.2f} s -> {name}/spikes.csv"
+
+
+def validity_lines(experiments) -> list[str]:
+    """Summary lines on the linear range (fem.experiments.runner.linear_validity): a warning per
+    experiment beyond it, and, when a stored response model answered (no full displacement
+    field), that element inversion was not checked."""
+    lines = [f"  warning: {w}" for e in experiments if (w := validity_warning(e)) is not None]
+    unchecked = [e for e in experiments if e.validity is not None and not e.validity["inversion_checked"]]
+    if unchecked:
+        strain = max(e.validity["max_receptor_strain"] for e in unchecked)
+        lines.append(f"  linear range: receptor strains up to {strain:.2f} (limit "
+                     f"{unchecked[0].validity['max_linear_strain']:g}); element inversion not checked: a stored "
+                     f"response model has no full displacement field (--pvd factorises and checks it)")
+    return lines
 
 
 def _span(values, fmt=".4g") -> str:

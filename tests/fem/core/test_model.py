@@ -281,8 +281,9 @@ def test_from_mesh_save_vtu_and_csv(tmp_path):
     meshio.write(tmp_path / "mesh.vtu", meshio.Mesh(
         pts, [("tetra", cells)], cell_data={"layer": [layer]},
         point_data={"nail": regions["ymin"].astype(np.uint8), "pad": regions["ymax"].astype(np.uint8)}))
-    model = Model.from_mesh(tmp_path / "mesh.vtu", material="m43338", nu=0.48)
+    model = Model.from_mesh(tmp_path / "mesh.vtu", material="m43", nu=0.48)
     assert set(model.regions) == {"nail", "pad"}
+    assert Model.from_mesh(tmp_path / "mesh.vtu").material.code == "m33"        # default: one digit per layer
     sol = model.solve(prescribed={"nail": 0.0, "pad": (0, -0.1, 0)})
     points = np.array([[0.5, 0.8, 0.5], [0.2, 0.3, 0.7]])
     write_solution(tmp_path / "out" / "static.vtu", sol, points=points)
@@ -303,6 +304,7 @@ def test_from_mesh_save_vtu_and_csv(tmp_path):
 def test_triangle6_export(tmp_path):
     pts, cells, regions = ref.box(np.linspace(0, 1, 3), np.linspace(0, 1, 3))
     model = Model(pts, cells, np.ones(len(cells)), regions)
+    assert model.material.code == "m3"                 # the default material has one digit per layer
     write_solution(tmp_path / "s.vtu", model.solve(prescribed={"ymin": 0.0, "ymax": (0.01, 0)}))
     back = meshio.read(tmp_path / "s.vtu")
     conn = back.cells[0].data
@@ -333,7 +335,8 @@ def test_bad_inputs(block3d):
     pts, cells, regions = ref.box(np.linspace(0, 1, 2), np.linspace(0, 1, 2))
     for kwargs, text in [({"nu": 0.5}, "Poisson"), ({"nu": 0.6}, "Poisson"), ({"nu": -0.1}, "Poisson"),
                          ({"material": [0.01, 0.0]}, "positive"), ({"material": [-1.0]}, "positive"),
-                         ({"material": "x12"}, "mABCDE"), ({"material": "m4"}, "layers [2]")]:
+                         ({"material": "x12"}, "mABCDE"),
+                         ({"material": "m4"}, "material m4 has 1 digit but this model has layers 1 and 2: give 2 digits")]:
         layer = np.array([1, 2] if kwargs.get("material") in ([0.01, 0.0], "m4") else [1, 1])
         with pytest.raises(InputError) as exc:
             Model(pts, cells, layer, regions, **kwargs)

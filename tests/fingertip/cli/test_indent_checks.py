@@ -1,0 +1,77 @@
+"""`indent` guards: a material code with one digit per layer of the model (else one error line naming
+the layers, before any work), and the linear range of a run (element inversion, receptor strain)
+in run.json and the summary."""
+import json
+
+import pytest
+
+from tests.helpers import cli, snapshot
+
+
+def _one_error(ran) -> str:
+    err = ran.err.strip()
+    assert ran.code == 2 and err.startswith("error: ") and "\n" not in err, ran.err
+    return err
+
+
+def test_six_digit_code_refused_on_five_layer_model(section, tmp_path):
+    """m433310 (meant: a 1e10 Pa bone) would be six layers with a 10 Pa bone: refused, naming the
+    option and the model's layers, before the model is read (no lock, no output, no response model)."""
+    scene = tmp_path / "s.toml"
+    scene.write_text('material = [0.01, 0.001, 0.001, 0.001]\n[[experiment]]\nindentor = "C5"\ndepth_mm = 0.5\n')
+    before = snapshot(section, tmp_path)
+    out = tmp_path / "bad"
+    err = _one_error(cli("indent", section, "--indentor", "C5", "--depth", "0.5", "--material", "m433310",
+                         "--out", out))
+    assert err == ("error: --material m433310 has 6 digits but this model has layers 1-5: give 5 digits (digit "
+                   "k = log10 of layer k's modulus in Pa), e.g. m43338")
+    err = _one_error(cli("prepare", section, "--material", "m4333"))
+    assert "--material m4333 has 4 digits but this model has layers 1-5" in err
+    err = _one_error(cli("indent", section, "--scene", scene, "--out", out))
+    assert "error: material [0.01, 0.001, 0.001, 0.001] gives 4 moduli but this model has layers 1-5: give 5" in err
+    assert snapshot(section, tmp_path) == before
+
+
+@pytest.mark.parametrize("material", ["m33338", "m43338", "m43339"])
+def test_codes_that_fit_accepted(cyl8, tmp_path, material):
+    """Five digits on the cylinder with bone (layers 1 and 5; digits 2-4 stand for no elements)."""
+    out = tmp_path / "ok"
+    ran = cli("indent", cyl8, "--indentor", "C5", "--depth", "0.25", "--material", material, "--no-plots",
+              "--no-pvd", "--out", out, "--quiet")
+    assert ran.code == 0, ran.err
+    assert json.loads((out / "run.json").read_text())["material"] == material
+
+
+def test_deep_wedge_inverts_elements_shallow_cylinder_does_not(cyl8, tmp_path):
+    """A sharp wedge 2.5 mm into the cylinder with bone (3 mm of tissue over the bone) turns about
+    1 % of the elements inside out and strains receptors by more than 1: run.json and the summary
+    say so, and the warning is logged; C5 0.25 mm deep stays in the linear range (receptor strains
+    0.1) and says nothing."""
+    deep, shallow = tmp_path / "deep", tmp_path / "shallow"
+    ran = cli("indent", cyl8, "--indentor", "wedge", "--depth", "1,2.5", "--no-plots", "--no-pvd", "--out", deep)
+    assert ran.code == 0, ran.err
+    v = json.loads((deep / "run.json").read_text())["experiments"][0]["validity"]
+    assert v["checked_indentation"] == 1 and v["depth_mm"] == 2.5 and v["inversion_checked"]
+    assert 0.002 < v["inverted_elements"] < 0.05 and v["max_receptor_strain"] > 1.0
+    assert v["max_linear_strain"] == 0.2 and not v["within_linear_range"]
+    line = [t for t in ran.out.splitlines() if "warning:" in t]
+    assert len(line) == 1 and line[0].startswith("  warning: wedge at 2.5 mm: the linear displacement inverts ")
+    assert "% of the elements and strains receptors by" in line[0] and "(> 0.2)" in line[0]
+    assert "large-deformation contact is not implemented yet" in line[0]
+    assert line[0].strip() in ran.err.splitlines()                  # the module logger's line on stderr
+    ran = cli("indent", cyl8, "--indentor", "C5", "--depth", "0.1,0.25", "--no-plots", "--no-pvd", "--out", shallow)
+    assert ran.code == 0 and "warning" not in ran.out + ran.err
+    v = json.loads((shallow / "run.json").read_text())["experiments"][0]["validity"]
+    assert v["inverted_elements"] == 0.0 and v["max_receptor_strain"] < 0.2 and v["within_linear_range"]
+
+
+def test_stored_response_model_leaves_inversion_unchecked(cyl8, tmp_path):
+    """Answered from a stored response model (no full field): receptor strains are checked,
+    inversion is not, and the summary says so."""
+    assert cli("prepare", cyl8, "--quiet").code == 0
+    out = tmp_path / "stored"
+    ran = cli("indent", cyl8, "--indentor", "wedge", "--depth", "2.5", "--no-plots", "--no-pvd", "--out", out)
+    assert ran.code == 0 and "response model: stored" in ran.out, ran.err
+    v = json.loads((out / "run.json").read_text())["experiments"][0]["validity"]
+    assert v["inverted_elements"] is None and not v["inversion_checked"] and v["max_receptor_strain"] > 1.0
+    assert "element inversion not checked: a stored response model has no full displacement field" in ran.out
