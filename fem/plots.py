@@ -501,18 +501,33 @@ def _readable_ticks(axis, nbins: int = 5) -> None:
 
 
 def finding_figure(finding) -> Figure:
-    """The curves of a `fem.thesis.findings.Finding`, titled with its thesis section and verdict."""
-    fig = Figure(figsize=(6.4, 4.2))
+    """The curves of a `fem.thesis.findings.Finding`, titled with its thesis section and verdict.
+
+    Series with axis 1 go on a second y axis (finding.y2label): one quantity per axis. Each series
+    has its own colour and open markers of growing size, so that curves that coincide stay
+    visible; the legend sits below the axes, covering no curve."""
+    fig = Figure(figsize=(6.4, 4.8), layout="constrained")
     ax = fig.add_subplot()
-    for s in finding.series:
-        ax.plot(s.x, s.y, s.style, label=s.label, markersize=4)
+    ax2 = ax.twinx() if any(s.axis for s in finding.series) else None
+    lines = []
+    for i, s in enumerate(finding.series):
+        (line,) = (ax2 if s.axis else ax).plot(s.x, s.y, s.style, label=s.label, markersize=3 + 1.5 * (i % 3),
+                                                 markerfacecolor="none", **({} if _has_colour(s.style) else
+                                                                            {"color": f"C{i % 10}"}))
+        lines.append(line)
     if finding.logx:
         ax.set_xscale("log")
     ax.set_xlabel(finding.xlabel)
     ax.set_ylabel(finding.ylabel)
+    if ax2 is not None:
+        ax2.set_ylabel(finding.y2label)
     ax.set_title(f"{finding.section}: {finding.verdict}", fontsize=10)
     ax.grid(alpha=0.3)
-    if finding.series:
-        ax.legend(fontsize=7)
-    fig.tight_layout()
+    if lines:
+        fig.legend(handles=lines, loc="outside lower center", ncol=min(3, len(lines)), fontsize=7)
     return fig
+
+
+def _has_colour(style: str) -> bool:
+    """Whether a matplotlib format string names a colour ('k:', 'r-')."""
+    return any(ch in "bgrcmykw" for ch in style)

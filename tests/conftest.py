@@ -10,13 +10,16 @@ import shutil
 import pytest
 
 import pipeline
-from fem.thesis.findings import Workshop
+from fem.thesis.findings import MeshLevel, Workshop
+
+TEST_LEVEL = MeshLevel("tests: 0.25 mm 2D, 1 mm 3D", 0.25, 1.0)
+"""The meshes the thesis-claim tests pin their numbers on: the coarsest 2D level and the 1 mm 3D presets."""
 
 
 @pytest.fixture(scope="session")
 def shop(tmp_path_factory):
-    """One quick Workshop for every thesis-claim test: each 2D model and 3D preset is meshed once."""
-    return Workshop(tmp_path_factory.mktemp("thesis_models"), quick=True)
+    """One Workshop for every thesis-claim test (TEST_LEVEL): each 2D model and 3D preset is meshed once."""
+    return Workshop(tmp_path_factory.mktemp("thesis_models"), quick=True, level=TEST_LEVEL)
 
 
 def _mesh(folder, *args):

@@ -73,8 +73,47 @@ def write_sections(folder, polys, zs=None) -> Path:
 
 
 def by_key(findings) -> dict:
-    """Thesis findings by their key."""
+    """Thesis findings by their key, each first checked by `assert_computed`."""
+    for f in findings:
+        assert_computed(f)
     return {f.key: f for f in findings}
+
+
+def _moved(check, inside: bool):
+    """The check with its value moved clearly inside (or outside) its band, one level only."""
+    from dataclasses import replace
+
+    step = max(abs(check.limit), check.tol, 1.0)
+    if check.test == ">":
+        value = check.limit + step if inside else check.limit - step
+    elif check.test == "<":
+        value = check.limit - step if inside else check.limit + step
+    else:
+        value = check.limit if inside else check.limit + check.tol + step
+    return replace(check, value=value, coarse=None)
+
+
+def assert_computed(finding) -> None:
+    """A finding's verdict and reason follow its numbers: for each check, with every other check
+    moved inside its band, moving this one across its band turns the verdict from reproduced to
+    differs and changes the reason; the check's number appears in the reason; a coarse value one
+    band-width away makes it 'within mesh uncertainty'; and the JSON round trip recomputes both."""
+    from dataclasses import replace
+
+    from fem.thesis.findings import DIFFERS, REPRODUCED, UNCERTAIN, Finding, number
+
+    assert finding.checks, finding.key
+    for i, check in enumerate(finding.checks):
+        assert number(check.value) in finding.reason, (finding.key, check.what)
+        base = [_moved(c, True) for c in finding.checks]
+        inside = replace(finding, checks=base)
+        outside = replace(finding, checks=base[:i] + [_moved(check, False)] + base[i + 1:])
+        assert (inside.verdict, outside.verdict) == (REPRODUCED, DIFFERS), (finding.key, check.what)
+        assert inside.reason != outside.reason, (finding.key, check.what)
+        near = replace(base[i], coarse=_moved(check, False).value)
+        assert replace(finding, checks=base[:i] + [near] + base[i + 1:]).verdict == UNCERTAIN, (finding.key, i)
+    again = Finding.from_json(json.loads(json.dumps(finding.to_json())))
+    assert (again.verdict, again.reason) == (finding.verdict, finding.reason), finding.key
 
 
 def default_sigint() -> None:

@@ -44,3 +44,58 @@ def test_python_blocks_run(page, tmp_path, monkeypatch):
     for line, source in python_blocks(page):
         code = compile(source, f"{page.relative_to(ROOT)}:{line}", "exec")
         exec(code, namespace)
+
+
+SHELL = re.compile(r"^```(?:bash|sh|text)[ \t]*\n(.*?)^```[ \t]*$", re.S | re.M)
+
+
+def documented_commands() -> list[tuple[str, list[str]]]:
+    """(where, argv) of every `python pipeline.py ...` line of a shell or text block in README.md and
+    docs/*.md: comments dropped, continuation lines joined, [optional] parts left out."""
+    import shlex
+
+    out = []
+    for page in [ROOT / "README.md", *sorted(DOCS.glob("*.md"))]:
+        text = page.read_text(encoding="utf-8")
+        for m in SHELL.finditer(text):
+            block = m.group(1).replace("\\\n", " ")
+            first = text.count("\n", 0, m.start()) + 2
+            for k, line in enumerate(block.splitlines()):
+                line = re.sub(r"\[[^\]]*\]", "", line.split("#")[0]).strip()
+                for part in line.split("&&"):
+                    words = shlex.split(part)
+                    if words[:2] == ["python", "pipeline.py"] and len(words) > 2 and "..." not in words:
+                        out.append((f"{page.name}:{first + k}", words[2:]))
+    return out
+
+
+COMMANDS = documented_commands()
+
+
+def test_every_documented_command_parses(capsys):
+    """Every command line the docs show names a real command and real flags with values the
+    parser accepts (running them takes minutes each: the examples and the tests run the workflows)."""
+    from fingertip.cli import build_parser
+
+    assert len(COMMANDS) > 30
+    for where, argv in COMMANDS:
+        parser = build_parser(command=argv[0])
+        try:
+            parser.parse_args(argv)
+        except SystemExit:
+            pytest.fail(f"{where}: `python pipeline.py {' '.join(argv)}` does not parse: {capsys.readouterr().err}")
+
+
+def test_documented_2d_commands_run(tmp_path, monkeypatch):
+    """The documented commands on the 2D cylinder (meshing it, indenting it by depth and by force with
+    a sweep) run as written, in order, in a fresh folder."""
+    import pipeline
+
+    monkeypatch.chdir(tmp_path)
+    cyl8 = [argv for _, argv in COMMANDS if (argv[0] == "mesh" and "cylinder8" in argv)
+            or (argv[0] == "indent" and argv[1] == "out/cyl8" and "--scene" not in argv)]
+    runs = list(dict.fromkeys(tuple(a) for a in cyl8))
+    assert runs[0][0] == "mesh" and len(runs) >= 3
+    for argv in runs:
+        assert pipeline.main([*argv, "--quiet"]) == 0, argv
+    assert (tmp_path / "out" / "cyl8" / "model.json").is_file()

@@ -26,6 +26,7 @@ import numpy as np
 from fem.core.measures import base_measure
 from fem.io.vtu import vtu_mesh, write_mesh
 from fingertip.errors import InputError
+from fingertip.progress import as_progress
 from fingertip.staging import write_json
 from fingertip.tables import columns_of, write_csv
 
@@ -148,16 +149,18 @@ def writes_pvd(output, indentations: int) -> bool:
     return bool(output.pvd) if output.pvd is not None else indentations <= PVD_DEFAULT_MAX
 
 
-def write_run(folder, model_dir, scene_run, afferents=(None, {})) -> dict[str, dict]:
+def write_run(folder, model_dir, scene_run, afferents=(None, {}), progress=None) -> dict[str, dict]:
     """Every experiment's CSVs (and PVD series), its afferents' (`write_afferents`, from
     afferents = (population, {experiment name: response}) of fem.receptors.afferents.scene_responses) and
     run.json into `folder` (an existing, usually staged, folder). Returns {experiment name: its
-    tables (`run_tables`, with "afferents": `afferent_tables` for a traced experiment)} for the plots."""
+    tables (`run_tables`, with "afferents": `afferent_tables` for a traced experiment)} for the plots.
+    progress: a fingertip.progress object (None: silent); writing shows a bar per experiment."""
     folder = Path(folder)
     out = scene_run.scene.output
     population, responses = afferents
+    progress = as_progress(progress)
     written = {}
-    for run in scene_run.experiments:
+    for run in progress.bar(scene_run.experiments, desc="writing the run folder", unit="experiment"):
         tables = written[run.name] = run_tables(run, scene_run)
         write_csv(folder / f"{run.name}.csv", tables["steps"])
         write_csv(folder / f"{run.name}_surface.csv", tables["surface"])
@@ -165,7 +168,7 @@ def write_run(folder, model_dir, scene_run, afferents=(None, {})) -> dict[str, d
         if run.name in responses:
             tables["afferents"] = write_afferents(folder / run.name, responses[run.name])
         if writes_pvd(out, len(run.steps)):
-            _write_pvd(folder, run, scene_run)
+            _write_pvd(folder, run, scene_run, progress)
     record = run_record(model_dir, scene_run)
     if population is not None:
         record["afferents"] = afferents_record(population, responses)
@@ -234,7 +237,7 @@ def pvd_times(run) -> tuple[list[float], str]:
     return values, meaning
 
 
-def _write_pvd(folder, run, scene_run) -> None:
+def _write_pvd(folder, run, scene_run, progress) -> None:
     """<name>_<step>.vtu with the full fields of every indentation and the <name>.pvd series, its
     timestep values as `pvd_times` says."""
     comp = scene_run.contact.compliance(run.indentor.approach)
@@ -243,7 +246,7 @@ def _write_pvd(folder, run, scene_run) -> None:
     with ThreadPoolExecutor(max_workers=2) as pool:     # files compress in parallel (zlib frees the GIL)
         writes = [pool.submit(write_mesh, folder / name, vtu_mesh(scene_run.model.solution(U[:, i])))
                   for i, name in enumerate(names)]
-        for w in writes:
+        for w in progress.bar(writes, desc=f"{run.name}: VTU files", unit="file"):
             w.result()
     times, meaning = pvd_times(run)
     entries = "\n".join(f'    <DataSet timestep="{t:.9g}" file="{n}"/>' for t, n in zip(times, names))

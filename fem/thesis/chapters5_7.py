@@ -28,7 +28,8 @@ from fem.io.modelfolder import (
 )
 from fem.receptors.grid import ReceptorGrid, ReceptorSampler
 from fem.thesis.chapter4_receptors import BAR_WIDTH_MM
-from fem.thesis.findings import DIFFERS, REPRODUCED, Finding, Series, Workshop
+from fem.thesis.findings import Check, Finding, Series, Workshop
+from fem.thesis.quotes import QUOTES
 
 
 # ----------------------------------------------------------------------------- 6.2.1: dorsal half
@@ -56,27 +57,31 @@ def dorsal_ratios(model_dir, preset: str, depths_mm) -> list[tuple[float, float,
 
 
 def dorsal_half(shop: Workshop) -> list[Finding]:
-    """Thesis 6.2.1: under a 2 mm line load the dorsal half moves less than 10 % of the maximum
-    (3D human and monkey presets, 1 mm elements; the monkey also at 1 mm depth)."""
-    rows = {preset: dorsal_ratios(shop.preset(preset, 1.0), preset, [1.0, 2.0]) for preset in ("human", "monkey")}
-    human2, monkey2, monkey1 = rows["human"][1][0], rows["monkey"][1][0], rows["monkey"][0][0]
-    ok = human2 < 0.1 and monkey2 < 0.1
+    """Thesis 6.2.1 (figure 6-5, the monkey) and 6.2.2 (of figure 6-7, the human): under a 2 mm
+    line load the dorsal half and the proximal end move vertically less than 10 % of the maximum
+    (3D presets; the monkey also at 1 mm depth)."""
+    rows = {preset: dorsal_ratios(shop.preset(preset), preset, [1.0, 2.0]) for preset in ("monkey", "human")}
+    (m1, _, _, _), (m2, _, m_prox, _) = rows["monkey"]
+    _, (h2, _, h_prox, _) = rows["human"]
     table = [{"preset": p, "depth_mm": d, "dorsal_surface": r[0], "below_axis": r[1], "proximal_cut": r[2],
               "distal_cut": r[3]} for p, rr in rows.items() for d, r in zip((1.0, 2.0), rr)]
+    band = "'less than 10% of the maximum deformations' read as of the largest vertical displacement"
     return [Finding(
-        "sec6-2-1_dorsal", "6.2.1 (surface deformation under a line load)", "Dorsal half under a 2 mm line load",
-        "In the 3D models the entire dorsal half moved vertically less than 10 % of the maximum "
-        "displacement under a 2 mm line load.",
-        "largest dorsal-surface |u_y| over the maximum at 2 mm, monkey preset [%]", 10.0, 100 * monkey2,
-        REPRODUCED if ok else DIFFERS,
-        f"Human preset {100 * human2:.1f} % (holds); monkey preset {100 * monkey2:.1f} %, but "
-        f"{100 * monkey1:.1f} % at 1 mm. The monkey preset is the human one at half scale with the "
-        f"same skin thickness, so 2 mm is as deep relative to its section as 4 mm on the human; at "
-        f"the same relative depth it holds. (A neo-Hookean large-deformation run of the monkey gives "
-        f"12-13 %, so large deformation does not explain it: benchmarks/dorsal_large_deformation.py.)",
+        "sec6-2-1_dorsal", "6.2.1, figure 6-5 (monkey); 6.2.2 (human, of figure 6-7)", "Dorsal half under a 2 mm line load",
+        QUOTES["sec6-2-1_dorsal"],
+        [Check("largest dorsal-surface |u_y| over the largest |u_y|, 2 mm deep, monkey preset", 100 * m2, "<", 10.0, "%",
+               why=band),
+         Check("the same on the proximal cut, monkey preset", 100 * m_prox, "<", 10.0, "%", why="'and the proximal end'"),
+         Check("largest dorsal-surface |u_y| over the largest |u_y|, 2 mm deep, human preset", 100 * h2, "<", 10.0, "%",
+               why="6.2.2 states the same bound for the human under a line load"),
+         Check("the same on the proximal cut, human preset", 100 * h_prox, "<", 10.0, "%")],
+        f"A wedge across the finger at the middle of the pad, m43338. The monkey's dorsal surface moves "
+        f"{100 * m1:.1f} % at 1 mm deep. The thesis's model rested on a table that held its dorsal nodes vertically "
+        "where the finger touched it; the presets here hold the nail and the proximal cut's core "
+        "(fem.io.modelfolder.HELD).",
         "depth [mm]", "dorsal |u_y| / max |u_y|",
         [Series(p, [1.0, 2.0], [r[0] for r in rr]) for p, rr in rows.items()] +
-        [Series("thesis bound", [1.0, 2.0], [0.1, 0.1], ":")], table)]
+        [Series("thesis bound", [1.0, 2.0], [0.1, 0.1], "k:")], table)]
 
 
 # ----------------------------------------------------------------------------- 6.2.1: layers (fig. 6-10)
@@ -114,12 +119,12 @@ def monkey_section(z_mm: float, **skin):
 
 def layer2_reasons(shop: Workshop) -> dict:
     """{case: layer2_change} of the candidate reasons on the monkey section at z = 5 mm: the
-    thesis's prescribed nodal line instead of the wedge (linear, and neo-Hookean on 0.25 mm
-    elements: a node pushed 2 mm into 0.125 mm elements inverts them before the depth), and a
+    thesis's prescribed nodal line instead of the wedge (linear, and neo-Hookean on elements of at
+    least 0.25 mm: a node pushed 2 mm into 0.125 mm elements inverts them before the depth), and a
     thin skin (THIN_SKIN_MM) under the wedge."""
     out = {"2D section, nodal line": layer2_change(
         *(_line_profile(shop.folder("monkey_section", monkey_section(5.0)), code, False) for code in LAYER2_CODES))}
-    coarse = shop.folder("monkey_section", monkey_section(5.0), size_mm=0.25)
+    coarse = shop.folder("monkey_section", monkey_section(5.0), size_mm=max(0.25, shop.size_mm))
     out["2D section, nodal line, neo-Hookean"] = layer2_change(
         *(_line_profile(coarse, code, True) for code in LAYER2_CODES))
     epi, der = THIN_SKIN_MM
@@ -148,44 +153,39 @@ def layer_effects(shop: Workshop) -> list[Finding]:
                    "difference_mm": e.difference_mm, "neutral_mm": " ".join(f"{v:.2f}" for v in e.neutral_mm)}
                   for e in study.effects]
     change.update(layer2_reasons(shop))
-    epi, der = THIN_SKIN_MM
     table += [{"model": k, "layer": 2, "codes": " ".join(LAYER2_CODES), "change_at_0.5mm": v[0],
                "neutral_mm": " ".join(f"{x:.2f}" for x in v[1])} for k, v in change.items()]
     near, flips = change["3D monkey"]
-    ok = near > 0 and bool(flips) and abs(flips[0] - 1.25) < 0.25   # stiffer: more deflection near
     sense = {k: "the solve did not reach 2 mm" if np.isnan(v[0]) else
              f"{v[0]:+.3f} mm, sign change at {', '.join(f'{x:.2f}' for x in v[1]) or 'none'} mm"
              for k, v in change.items()}
     e3, e2 = eff["3D monkey"], eff["2D section"]
 
-    def candidate(label, what):         # a candidate reason is ruled out when it keeps the 3D model's sense
+    def candidate(label, what):         # a candidate reason turns the sense the 3D model gives
         if np.isnan(change[label][0]):
-            return f"{what} not measured ({sense[label]})"
+            return f"{what}: not measured ({sense[label]})"
         kept = np.sign(change[label][0]) == np.sign(near)
-        return f"{'not ' if kept else ''}{what} ({sense[label]}{'' if kept else ': this turns the sense'})"
-    large = candidate("2D section, nodal line, neo-Hookean",
-                      "large deformation, the same line neo-Hookean on 0.25 mm elements")
+        return f"{what}: {sense[label]}, {'the same sense' if kept else 'the thesis sense'}"
+    epi, der = THIN_SKIN_MM
     return [Finding(
         "fig6-10_layers", "6.2.1, figure 6-10", "Effect of each layer's stiffness on the line-load profile",
-        "Within about 1.25 mm of a 2 mm line load a stiffer layer 2 deflects more, beyond it less; "
-        "layers 3 and 4 stiffen the model everywhere, most at about 1.3 and 2.0 mm from the load.",
-        "distance where stiffening layer 2 changes the sign of its effect, 3D monkey [mm]", 1.25,
-        flips[0] if flips else None, REPRODUCED if ok else DIFFERS,
-        f"Stiffening layer 2 ({LAYER2_CODES[0]} -> {LAYER2_CODES[1]}) changes the deflection 0.5 mm "
-        f"from the load by {sense['3D monkey']} in the 3D model, and by {sense['2D section']} on its "
-        f"plane-strain section (epidermis 0.5, dermis 1.0 mm, as thesis 6.1 states). Layers 3 and 4 "
-        f"are most affected at {e3[3].most_affected_mm:.2f} and {e3[4].most_affected_mm:.2f} mm in 3D "
-        f"({e2[3].most_affected_mm:.2f}, {e2[4].most_affected_mm:.2f} mm in 2D; thesis 1.3 and 2.0 mm). "
-        f"Measured reason for layer 2: {candidate('2D section', 'the plane-strain assumption')}; on the "
-        f"section, {candidate('2D section, nodal line', 'the load, the prescribed nodal line of the thesis')}; "
-        f"{large}. "
-        + (f"It is the skin's thickness: with a {epi:g} mm epidermis and {der:g} mm dermis the sense "
-           f"turns to the thesis's ({sense[THIN_LABEL]}; more deflection between the two, the thesis's "
-           f"crossover is 1.25 mm). Under the 1.5 mm skin of an 8.6 mm wide section layer 2 acts as "
-           f"the foundation of the epidermis; under a thin skin, as part of the bending skin."
-           if change[THIN_LABEL][0] > 0 else
-           f"A thinner skin ({epi:g} mm epidermis, {der:g} mm dermis) does not turn it either "
-           f"({sense[THIN_LABEL]})."),
+        QUOTES["fig6-10_layers"],
+        [Check("deflection change 0.5 mm from the load when layer 2 is stiffened, 3D monkey", near, ">", 0.0, "mm",
+               why="'a decrease in stiffness' near the load: more deflection"),
+         Check("distance where stiffening layer 2 changes the sign of its effect, 3D monkey", flips[0] if flips else
+               float("nan"), "~", 1.25, "mm", tol=0.25, why="'about 1.25 mm'"),
+         Check("distance most affected by layer 3's modulus, 3D monkey", e3[3].most_affected_mm, "~", 1.3, "mm",
+               tol=0.25, why="'around 1.3 mm'"),
+         Check("distance most affected by layer 4's modulus, 3D monkey", e3[4].most_affected_mm, "~", 2.0, "mm",
+               tol=0.25, why="'approximately around 2.0 mm'")],
+        f"A wedge 2 mm deep across the 3D monkey and its plane-strain section at z = 5 mm (epidermis 0.5, dermis "
+        f"1.0 mm, thesis 6.1); layer 2 from {LAYER2_CODES[0]} to {LAYER2_CODES[1]} (the thesis gives no base model for "
+        f"it). Change 0.5 mm from the load and where it changes sign: 3D {sense['3D monkey']}; "
+        f"{candidate('2D section', 'plane-strain section')}; "
+        f"{candidate('2D section, nodal line', 'the section under a prescribed nodal line')}; "
+        f"{candidate('2D section, nodal line, neo-Hookean', 'the same line, neo-Hookean (large deformation)')}; "
+        f"{candidate(THIN_LABEL, f'a {epi:g} mm epidermis and {der:g} mm dermis')}. Layers 3 and 4 on the section: "
+        f"most affected at {e2[3].most_affected_mm:.2f} and {e2[4].most_affected_mm:.2f} mm.",
         "distance from the load [mm]", "surface deflection [mm]", series, table)]
 
 
@@ -300,41 +300,31 @@ def bars_3d(shop: Workshop) -> list[Finding]:
     deeper = {m: peak[(m, 1.0)] / peak[(m, 0.75)] for m in runs}
     wider = runs["m43338"].result.contact_area_mm2 / runs["m33338"].result.contact_area_mm2
     spread = outside["m43338"] / outside["m33338"]
-    ok_depth = deeper["m43338"] > 1 > deeper["m33338"]
-    ok_local = all(abs(f - 0.85) < 0.05 for f in fraction.values())
+    epidermis = params_for("monkey").epidermis_mm
     return [Finding(
         "fig6-25_bar_depth", "6.3.1, figure 6-25", "Strain energy density below a bar, 0.75 against 1.0 mm deep",
-        "In the multi-layered 3D monkey model (m43338) under a 1.5 mm bar 1 mm deep, strain energy "
-        "density is higher 1.0 mm below the skin than 0.75 mm below it: the stiff outer layer bends "
-        "like a beam, strains growing away from its neutral axis.",
-        "peak SED 1.0 mm deep over 0.75 mm deep, m43338 (section through the first touch)", None,
-        deeper["m43338"], REPRODUCED if ok_depth else DIFFERS,
-        f"m43338: {deeper['m43338']:.3f} (the deeper receptors see more); homogeneous skin m33338: "
-        f"{deeper['m33338']:.3f} (SED falls with depth, as under any load on a homogeneous body). "
-        f"Section z = {z0:.2f} mm, through the point the bar touched first.",
+        QUOTES["fig6-25_bar_depth"],
+        [Check("peak SED 1.0 mm deep over 0.75 mm deep, m43338, section through the first touch", deeper["m43338"],
+               ">", 1.0, why="'higher magnitudes of strains at a depth of 1.0 mm'")],
+        f"Homogeneous skin m33338: {deeper['m33338']:.3f} ({'higher' if deeper['m33338'] > 1 else 'lower'} at "
+        f"1.0 mm). Section z = {z0:.2f} mm, through the point the bar touched first; the epidermis (layer 1) is "
+        f"{epidermis:g} mm thick, so both depths lie below it.",
         "x across the pad [mm]", "strain energy density [MPa]", series, rows),
         Finding(
-        "fig7-4_local", "7.1.2, figure 7-4", "How much of the cross-section a bar reaches",
-        "Under a 1.5 mm bar 1 mm deep, a large portion (85 %) of the cross-section has less than "
-        "10 % of the maximum strain energy density, in both m33338 and m43338.",
-        "fraction of the section area with SED below 10 % of its maximum, m33338 [%]", 85.0,
-        100 * fraction["m33338"], REPRODUCED if ok_local else DIFFERS,
-        f"m33338 {100 * fraction['m33338']:.1f} %, m43338 {100 * fraction['m43338']:.1f} % of the section "
-        f"at z = {z0:.2f} mm (sampled at the {len(area)} triangle centroids of its 2D mesh; judged "
-        f"within 5 points of the thesis's 85 %).", "threshold, fraction of the maximum SED",
-        "fraction of the section below it", cumulative, rows),
+        "fig7-4_local", "7.1.2, figure 7-4", "How much of the cross-section a bar reaches", QUOTES["fig7-4_local"],
+        [Check(f"fraction of the section area with SED below 10 % of its maximum, {m}", 100 * fraction[m], "~", 85.0,
+               "%", tol=5.0, why="'(85%)' read as 80-90 %") for m in ("m33338", "m43338")],
+        f"Section z = {z0:.2f} mm, sampled at the {len(area)} triangle centroids of its 2D mesh.",
+        "threshold, fraction of the maximum SED", "fraction of the section below it", cumulative, rows),
         Finding(
-        "sec7-1-2_gradual", "7.1.2, figure 7-4",
-        "Surface deformation beside a bar, homogeneous against stiff epidermis",
-        "Model m33338 deforms 'elastically', with sharp changes of vertical displacement at the bar "
-        "as in the 2D models; the surface deformation of m43338 is more gradual (a stiffer outer "
-        "layer spreads the deformation and widens the contact).",
-        "surface deflection 1 mm beyond the bar's edges, m43338 over m33338", None, spread,
-        REPRODUCED if spread > 1 else DIFFERS,
+        "sec7-1-2_gradual", "7.1.2, figure 7-4", "Surface deformation beside a bar, homogeneous against stiff epidermis",
+        QUOTES["sec7-1-2_gradual"],
+        [Check("surface deflection 1 mm beyond the bar's edges, m43338 over m33338", spread, ">", 1.0,
+               why="'more gradual' read as more deflection beside the bar"),
+         Check("contact area, m43338 over m33338", wider, ">", 1.0, why="'a wider area of contact'")],
         f"Deflection 1 mm outside the bar: m43338 {outside['m43338']:.3f} mm, m33338 {outside['m33338']:.3f} mm "
-        f"({spread:.2f}x, section z = {z0:.2f} mm). Contact area m43338 / m33338 = {wider:.2f}: under a "
-        f"flat bar the contact is set by the bar and the finger's curvature along its axis, so the "
-        f"widening shows in the deflection beside the bar rather than in the contact.",
+        f"(section z = {z0:.2f} mm); contact areas {runs['m43338'].result.contact_area_mm2:.2f} and "
+        f"{runs['m33338'].result.contact_area_mm2:.2f} mm^2.",
         "x across the pad [mm]", "surface deflection [mm]", surface, rows)]
 
 
@@ -372,53 +362,42 @@ def sections_2d_3d(shop: Workshop) -> list[Finding]:
     sed_ratio = float(sed["2D"].max() / sed["3D"].max())
     form = float(np.corrcoef(eps["3D"], eps["2D"])[0, 1])
     f3, f2 = run.line_force_N_per_mm(z0), res2.total_force_N
-    lower = all(v["off"].max() < v["3D"].max() for v in (eps, sed))
     rows = [{"model": k, "eps1_peak": float(eps[k].max()), "sed_peak_MPa": float(sed[k].max())}
             for k in ("2D", "3D", "off")]
     labels = {"2D": "2D section (plane strain)", "3D": f"3D, section z = {z0:.2f} mm", "off": f"3D, z = {z1:.2f} mm"}
     style = {"2D": "--", "3D": "-", "off": ":"}
     nu = float(run.model.material.nu[1])
     plane = 1.0 / (1.0 - nu**2)          # plane strain: modulus E / (1 - nu^2) against E
-    force = (f"The two sections carry {f3:.2e} (3D, contact forces within 0.75 mm of it) and {f2:.2e} "
-             f"N/mm (plane strain): {100 * (f3 / f2 - 1):+.0f} %. Under the same load, plane strain's "
-             f"modulus E / (1 - nu^2) lowers strains by 1 / {plane:.2f} at nu = {nu:g}")
+    force = (f"The bar 1 mm beyond first touch, m33338. The 2D model here is the plane-strain section of the 3D "
+             f"model through the first touch (the thesis's 2D model is its round cylinder). The sections carry "
+             f"{f3:.2e} (3D, contact forces within 0.75 mm of it) and {f2:.2e} N/mm (plane strain): "
+             f"{100 * (f3 / f2 - 1):+.0f} %; under the same load plane strain's modulus E / (1 - nu^2) lowers strains "
+             f"by 1 / {plane:.2f} at nu = {nu:g}.")
     return [Finding(
-        "fig7-2_eps1", "7.1.1, figure 7-2", "Maximum compressive strain, 2D section against 3D",
-        "Under the same bar at the same depth, the maximum compressive strain 0.75 mm deep is about "
-        "equal in magnitude and form in the 2D cylinder model and the central section of the 3D "
-        "model (m33338), slightly higher in 3D.",
-        "peak max compressive strain at 0.75 mm, 3D over 2D (section through the first touch)", 1.0, eps_ratio,
-        REPRODUCED if form > 0.95 and 1.0 <= eps_ratio <= 1.15 else DIFFERS,
-        f"3D / 2D peak {eps_ratio:.2f} (judged 'slightly higher' up to 1.15); correlation of the "
-        f"two profiles {form:.3f} (same form). The 2D model here is the section of the 3D model itself "
-        f"(the thesis used its round cylinder), so geometry and material are the same. {force}; "
-        f"the measured 3D / 2D ratio {eps_ratio:.2f} is that factor times the load ratio "
-        f"{f3 / f2:.2f} within {100 * abs(eps_ratio / (plane * f3 / f2) - 1):.0f} %.",
+        "fig7-2_eps1", "7.1.1, figure 7-2", "Maximum compressive strain, 2D section against 3D", QUOTES["fig7-2_eps1"],
+        [Check("correlation of the 2D and 3D max compressive strain profiles at 0.75 mm", form, ">", 0.95,
+               why="'approximately equal in ... form'"),
+         Check("peak max compressive strain at 0.75 mm, 3D over 2D", eps_ratio, "~", 1.075, tol=0.075,
+               why="'slightly higher' in 3D read as 1 to 1.15 times")],
+        force + f" 3D / 2D peak strain {eps_ratio:.2f} against the plane-strain factor times the load ratio, "
+        f"{plane * f3 / f2:.2f}.",
         "x across the pad [mm]", "max compressive strain at 0.75 mm",
         [Series(labels[k], x.tolist(), eps[k].tolist(), style[k]) for k in eps], rows),
         Finding(
-        "fig7-2_sed", "7.1.1, figure 7-2", "Strain energy density, 2D section against 3D",
-        "At the same depth the 2D model, being stiffer (plane strain: infinite axial stiffness), "
-        "gives the higher strain energy density 0.75 mm deep.",
-        "peak SED at 0.75 mm, 2D over 3D", None, sed_ratio, REPRODUCED if sed_ratio > 1 else DIFFERS,
-        f"2D / 3D peak {sed_ratio:.2f}: the 3D section {'is' if sed_ratio < 1 else 'is not'} the more "
-        f"strained. {force}. At equal depth the two sections here take about the same load, so the "
-        f"stiffer plane-strain section strains less and stores less energy: 3D / 2D SED "
-        f"{1 / sed_ratio:.2f}. The thesis's premise, that the stiffer 2D model needs more load for "
-        f"the same depth and so stores more energy, does not hold for this model, whose pad is "
-        f"held along its nail and at its proximal core over its 7.5 mm length.",
-        "x across the pad [mm]", "SED at 0.75 mm [MPa]",
+        "fig7-2_sed", "7.1.1, figure 7-2", "Strain energy density, 2D section against 3D", QUOTES["fig7-2_sed"],
+        [Check("peak SED at 0.75 mm, 2D over 3D", sed_ratio, ">", 1.0, why="'the 2D model being stiffer predicts a "
+               "higher strain energy density'")],
+        force, "x across the pad [mm]", "SED at 0.75 mm [MPa]",
         [Series(labels[k], x.tolist(), sed[k].tolist(), style[k]) for k in sed], rows),
         Finding(
         "fig7-3_off_centre", "7.1.1, figure 7-3", "A 3D section away from the most indented point",
-        "In a section about 2 mm from the most indented point, every strain measure 0.75 mm deep is lower "
-        "than in the central section (the finger's curvature along its axis indents it less); the "
-        "2D model cannot show this.",
-        "peak SED at 0.75 mm, off-centre over central section", None,
-        float(sed["off"].max() / sed["3D"].max()), REPRODUCED if lower else DIFFERS,
-        f"Section z = {z1:.2f} mm against z = {z0:.2f} mm: peak max compressive strain "
-        f"{eps['off'].max():.3f} against {eps['3D'].max():.3f}, peak SED {sed['off'].max():.2e} against "
-        f"{sed['3D'].max():.2e} MPa.", "x across the pad [mm]", "SED at 0.75 mm [MPa]",
+        QUOTES["fig7-3_off_centre"],
+        [Check("peak SED at 0.75 mm, off-centre over central section", float(sed["off"].max() / sed["3D"].max()),
+               "<", 1.0, why="'all the strain measures in this cross-section are lower'"),
+         Check("peak max compressive strain at 0.75 mm, off-centre over central section",
+               float(eps["off"].max() / eps["3D"].max()), "<", 1.0)],
+        f"Section z = {z1:.2f} mm against z = {z0:.2f} mm ({z0 - z1:.2f} mm apart); peak SED {sed['off'].max():.2e} "
+        f"against {sed['3D'].max():.2e} MPa.", "x across the pad [mm]", "SED at 0.75 mm [MPa]",
         [Series(labels[k], x.tolist(), sed[k].tolist(), style[k]) for k in ("3D", "off")], rows)]
 
 
@@ -432,8 +411,8 @@ def _rank_correlation(a, b) -> float:
 def contact_vs_diameter(shop: Workshop) -> list[Finding]:
     """Thesis 6.3.2 (figure 6-30): cylinders C1-C8 across the 3D monkey pad at constant force (the
     force taking C4 1 mm deep): contact radius up, peak pressure down with the cylinder's radius.
-    Thesis 5.2 (figure 5-14, in vivo human fingertips): at a fixed depth the contact area grows
-    with the cylinder's diameter, linearly at small depths; on the 3D human preset (1 mm elements)."""
+    Thesis 5.2.3 (figure 5-14, in vivo human fingertips): at the smaller depths the contact area
+    varies linearly with the cylinder's diameter; on the 3D human preset."""
     def experiment(folder):          # 3D default placement: across the finger, middle of the pad
         return DeflectionExperiment(folder, indentor="cylinder:C4", progress=shop.progress)
 
@@ -445,44 +424,46 @@ def contact_vs_diameter(shop: Workshop) -> list[Finding]:
     R = at_force.diameters_mm / 2
     r_up, p_down = _rank_correlation(R, radius), _rank_correlation(R, pressure)
     human_depths = (0.5, 1.0, 2.0)
-    human = cylinder_series(experiment(shop.preset("human", 1.0)), "m43338", depths_mm=list(human_depths))
+    human = cylinder_series(experiment(shop.preset("human")), "m43338", depths_mm=list(human_depths))
     D = human.diameters_mm
     fits = []
     for k in range(len(human_depths)):
         area = human.contact_area_mm2[k]
         resid = area - np.polyval(np.polyfit(D, area, 1), D)
         fits.append(float(np.sqrt(np.mean(resid**2)) / np.mean(area)))
-    grows = bool(np.all(np.diff(human.contact_area_mm2, axis=1) > 0))
+    rises = int(np.sum(np.diff(pressure) >= 0))
     rows_m = [{"cylinder": c, "radius_mm": float(R[i]), "contact_radius_mm": float(radius[i]),
                "max_pressure_kPa": 1e3 * float(pressure[i]), "depth_mm": float(at_force.depth_mm[0, i])}
               for i, c in enumerate(at_force.codes)]
     rows_h = [{"cylinder": c, "diameter_mm": float(D[i]),
                **{f"area_{d:g}mm_mm2": float(human.contact_area_mm2[k, i]) for k, d in enumerate(human_depths)}}
               for i, c in enumerate(human.codes)]
+    series = [Series("contact radius [mm]", R.tolist(), radius.tolist()),
+              Series("peak pressure [kPa]", R.tolist(), (1e3 * pressure).tolist(), "--s", axis=1)]
+    at = (f"At {1e3 * force:.2f} mN (the force taking C4 1 mm deep, m43338, across the pad; the thesis does not "
+          f"state its force): contact radius {radius[0]:.2f} mm (C1) to {radius[-1]:.2f} mm (C8), rank correlation "
+          f"with the cylinder radius {r_up:+.2f}; peak pressure {1e3 * pressure[0]:.2f} to {1e3 * pressure[-1]:.2f} kPa, "
+          f"rank correlation {p_down:+.2f}.")
+    contact = [Finding(
+        f"fig6-30_contact_{name}", "6.3.2, figure 6-30", "Contact radius and peak pressure against cylinder radius (3D monkey)",
+        QUOTES["fig6-30_contact"], [check], at, "cylinder radius [mm]", "equivalent contact radius [mm]", series,
+        rows_m, logx=True, y2label="peak pressure [kPa]", reading=how)
+        for name, check, how in (
+            ("trend", Check("rank correlation of peak pressure with cylinder radius, C1-C8", p_down, "<", -0.9),
+             "'the maximum pressure also reduces with increase in radius' as a trend over C1-C8"),
+            ("every_step", Check("cylinders C2-C8 whose peak pressure is not below the next smaller one's", rises, "<",
+                                 0.5, why="none"), "'reduces with increase in radius' from every cylinder to the next"))]
     return [Finding(
-        "fig5-14_area", "5.2, figure 5-14", "Contact area against cylinder diameter at fixed depths (3D human)",
-        "In vivo (one subject, curves only): at a fixed depth the contact area grows with the "
-        "cylinder's diameter, linearly for the smaller depths.",
-        f"RMS deviation from a straight line over the mean area at {human_depths[0]:g} mm [%]", None,
-        100 * fits[0], REPRODUCED if grows and fits[0] < 0.1 else DIFFERS,
-        f"The area grows with the diameter at every depth: {grows}. Deviation from a straight line "
-        + ", ".join(f"{100 * f:.1f} % at {d:g} mm" for f, d in zip(fits, human_depths))
-        + " (judged linear below 10 %). The recorded areas are printed as curves only; the model's "
-        "trend is compared.", "cylinder diameter [mm]", "contact area [mm^2]",
+        "fig5-14_area", "5.2.3, figure 5-14 (in vivo)", "Contact area against cylinder diameter at fixed depths (3D human)",
+        QUOTES["fig5-14_area"],
+        [Check(f"RMS deviation of the contact area from a straight line in the diameter, {human_depths[0]:g} mm deep, "
+               "over the mean area", 100 * fits[0], "<", 10.0, "%", why="'varies linearly' (with an offset) at the "
+               "smallest depth")],
+        "Deviation from a straight line " + ", ".join(f"{100 * f:.1f} % at {d:g} mm" for f, d in zip(fits, human_depths))
+        + ". The thesis states this of its in vivo measurements (one subject, printed as curves only) and runs no "
+        "model for it; the 3D human preset's trend is compared with it.", "cylinder diameter [mm]", "contact area [mm^2]",
         [Series(f"{d:g} mm deep", D.tolist(), human.contact_area_mm2[k].tolist()) for k, d in enumerate(human_depths)],
-        rows_h),
-        Finding(
-        "fig6-30_contact", "6.3.2, figure 6-30", "Contact radius and peak pressure against cylinder radius (3D monkey)",
-        "Indented to a prescribed force, a larger cylinder makes a larger contact (radius of the "
-        "circle of equal area) and a lower peak contact pressure.",
-        "rank correlation of contact radius with cylinder radius, C1-C8", 1.0, r_up,
-        REPRODUCED if r_up >= 0.9 and p_down <= -0.9 else DIFFERS,
-        f"At {1e3 * force:.2f} mN (C4 1 mm deep, m43338, across the pad): contact radius "
-        f"{radius[0]:.2f} mm (C1) to {radius[-1]:.2f} mm (C8), rank correlation {r_up:+.2f}; peak pressure "
-        f"{1e3 * pressure[0]:.2f} to {1e3 * pressure[-1]:.2f} kPa, rank correlation {p_down:+.2f}. The "
-        f"thesis does not state its force.", "cylinder radius [mm]", "equivalent contact radius [mm]",
-        [Series("contact radius", R.tolist(), radius.tolist()),
-         Series("peak pressure [kPa]", R.tolist(), (1e3 * pressure).tolist(), "--s")], rows_m, logx=True)]
+        rows_h), *contact]
 
 
 # ----------------------------------------------------------------------------- 6.3.3: step shapes
@@ -518,44 +499,48 @@ def steps_3d(shop: Workshop) -> list[Finding]:
     at_v = [float(cm.points_mm[np.argmax(r.pressure_MPa), 0] - x) for r, x in zip(results, positions)]
     sed = np.array([sampler.measures(r.observed, ["sed_MPa"])["sed_MPa"] for r in results])   # (positions, receptors)
     rho = _rank_correlation(area, pressure)
-    # the pad's top at x = x_top is over the step's convex half (v in [0, L/2]) for datums in
-    # [x_top - L/2, x_top] and over its concave half for datums in [x_top - L, x_top - L/2]
-    x_top = float(sn.x[np.argmax(sn.x @ -down), 0])
+    opposite = float(100 * np.mean(np.sign(np.diff(area)) * np.sign(np.diff(pressure)) < 0))
+    # the pad's top, from the model's geometry: the point of the section's outer curve farthest against the
+    # approach; the datum puts it over the rise's convex half (v in [0, L/2]) for datums in [x_top - L/2,
+    # x_top] and over its concave half for datums in [x_top - L, x_top - L/2]
+    ring = monkey_section(z_mid).curves[0]
+    x_top = float(ring[np.argmax(ring @ -np.asarray(down, float)[:2]), 0])
+    step = float(positions[1] - positions[0])
     x_min, x_max = float(positions[np.argmin(area)]), float(positions[np.argmax(area)])
-    margin = 0.5
-    ok_places = ((x_top - L / 2 - margin <= x_min <= x_top + margin)
-                 and (x_top - L - margin <= x_max <= x_top - L / 2 + margin))
     k = int(np.argmax(pressure))
     rows = [{"step_position_mm": float(x), "contact_area_mm2": float(a), "max_pressure_kPa": float(p),
              "peak_at_v_mm": v} for x, a, p, v in zip(positions, area, pressure, at_v)]
-    series = [Series("contact area [mm^2]", positions.tolist(), area.tolist()),
-              Series("peak pressure [kPa] x 10", positions.tolist(), (10 * pressure).tolist(), "--s")]
-    where = (f"{len(positions)} positions at {1e3 * force:.2f} mN; the pad's top (x = {x_top:+.2f} mm) is over "
-             f"the rise's convex half for datums {x_top - L / 2:+.2f} to {x_top:+.2f} mm and its concave half "
-             f"for {x_top - L:+.2f} to {x_top - L / 2:+.2f} mm")
+    where = (f"{len(positions)} positions {step:g} mm apart at {1e3 * force:.2f} mN (the force taking the step's "
+             f"lower flat {STEP_DEPTH_MM:g} mm deep, m43338; the thesis does not state its force); the pad's top "
+             f"(x = {x_top:+.2f} mm on the section's outer curve) is over the rise's convex half for datums "
+             f"{x_top - L / 2:+.2f} to {x_top:+.2f} mm and its concave half for {x_top - L:+.2f} to "
+             f"{x_top - L / 2:+.2f} mm")
+    half = L / 4 + step / 2
+    by_place = [Series("contact area [mm^2]", positions.tolist(), area.tolist()),
+                Series("peak pressure [kPa]", positions.tolist(), pressure.tolist(), "--s", axis=1)]
+    scatter = [Series("positions of step 5", area.tolist(), pressure.tolist(), "o")]
+    inverse = [Finding(
+        f"fig6-39_step_inverse_{name}", "6.3.3, figure 6-39",
+        "Contact area against peak pressure as step 5 crosses the pad (3D monkey)", QUOTES["fig6-39_step_inverse"],
+        [check], f"{where}. The highest peak pressure, {pressure[k]:.3f} kPa, is at datum {positions[k]:+.2f} mm "
+        f"with {area[k]:.2f} mm^2 of contact, {at_v[k]:+.2f} mm into the rise (its convex half is {L / 2:.2f} mm long).",
+        "contact area [mm^2]", "peak pressure [kPa]", scatter, rows, reading=how)
+        for name, check, how in (
+            ("trend", Check("rank correlation of contact area with peak pressure over the positions", rho, "<", -0.8,
+                            why="an inverse trend"), "'always accompanied by a decrease' as an inverse trend"),
+            ("every_step", Check("moves between neighbouring positions where area and peak pressure change in "
+                                 "opposite senses", opposite, ">", 99.9, "%", why="all of them"),
+             "'always accompanied by a decrease ... and vice-versa' at every move of the step"))]
     return [Finding(
         "fig6-39_step_extremes", "6.3.3, figure 6-39",
-        "Where the contact is smallest and largest as step 5 crosses the pad (3D monkey)",
-        "At constant force the contact area is smallest under the step's convex curvature and "
-        "largest when its concave part is over the fingertip.",
-        "datum of the smallest contact minus the pad's top [mm]", None, x_min - x_top,
-        REPRODUCED if ok_places else DIFFERS,
+        "Where the contact is smallest and largest as step 5 crosses the pad (3D monkey)", QUOTES["fig6-39_step_extremes"],
+        [Check("datum of the smallest contact, from the middle of the convex-half datums", x_min - (x_top - L / 4), "~",
+               0.0, "mm", tol=half, why="the convex half over the pad's top, widened by half a position step"),
+         Check("datum of the largest contact, from the middle of the concave-half datums", x_max - (x_top - 3 * L / 4),
+               "~", 0.0, "mm", tol=half, why="the concave half over the pad's top, widened by half a position step")],
         f"Smallest contact {area.min():.2f} mm^2 at datum {x_min:+.2f} mm, largest {area.max():.2f} mm^2 at "
-        f"{x_max:+.2f} mm ({where}; judged with {margin} mm to spare).",
-        "step position (datum) [mm]", "contact area [mm^2], peak pressure [kPa] x 10", series, rows),
-        Finding(
-        "fig6-39_step_inverse", "6.3.3, figure 6-39", "Contact area against peak pressure as step 5 crosses the pad",
-        "An increase of the contact area is always accompanied by a decrease of the peak contact "
-        "pressure, and vice versa.",
-        "rank correlation of contact area with peak pressure over the positions", -1.0, rho,
-        REPRODUCED if rho <= -0.8 else DIFFERS,
-        f"Rank correlation {rho:+.2f} ({where}). The highest peak pressure, {pressure[k]:.3f} kPa, is at "
-        f"datum {positions[k]:+.2f} mm with a middling contact ({area[k]:.2f} mm^2): it sits "
-        f"{at_v[k]:+.2f} mm into the rise (its convex half is {L / 2:.2f} mm long), not over the pad's "
-        f"top: the peak pressure follows the curvature where the step bites, the area the shape "
-        f"over the top, and they part where the two differ.",
-        "step position (datum) [mm]", "contact area [mm^2], peak pressure [kPa] x 10", series, rows),
-        _spatial_response(positions, receptors_x, sed, force)]
+        f"{x_max:+.2f} mm; {where}.", "step position (datum) [mm]", "contact area [mm^2]", by_place, rows,
+        y2label="peak pressure [kPa]"), *inverse, _spatial_response(positions, receptors_x, sed, force)]
 
 
 def _spatial_response(positions, receptors_x, sed, force_N: float, chosen=(-1.5, 0.0, 1.5)) -> Finding:
@@ -577,16 +562,13 @@ def _spatial_response(positions, receptors_x, sed, force_N: float, chosen=(-1.5,
     return Finding(
         "fig6-38_spatial_response", "6.3.3, figures 6-35 to 6-38",
         "Spatial response profiles of receptors at different places (step 5 across the 3D monkey)",
-        "For an identical stimulus the location of the receptor changes the form of its spatial "
-        "response profile (the curvature of the fingertip changes the stress state near each receptor).",
-        "largest difference between the receptors' peak-normalised profiles, aligned on the receptor [of peak]",
-        None, spread, REPRODUCED if spread > 0.1 else DIFFERS,
-        f"SED 0.75 mm deep at {len(receptors_x)} receptors across the middle section, {len(positions)} "
-        f"step positions at {1e3 * force_N:.2f} mN (the population of figs. 6-35 to 6-37; rates are not "
-        f"modelled). Receptors at x = {', '.join(f'{receptors_x[j]:+.2f}' for j in cols)} mm: peaks "
-        f"{peaks} Pa, with the step's datum {shifts} mm from "
-        f"the receptor; their normalised profiles, aligned on the receptor, differ by up to "
-        f"{100 * spread:.0f} % of the peak (0 on a flat half-space, where a shift of the receptor only "
-        f"shifts its profile; judged against 10 %).",
+        QUOTES["fig6-38_spatial_response"],
+        [Check("largest difference between the receptors' peak-normalised SED profiles, aligned on the receptor",
+               100 * spread, ">", 10.0, "% of peak", why="'can influence the form': a difference beyond 10 % of the "
+               "peak (a flat half-space gives 0)")],
+        f"SED 0.75 mm deep at {len(receptors_x)} receptors across the middle section, {len(positions)} step positions "
+        f"at {1e3 * force_N:.2f} mN (rates are not modelled). Receptors at x = "
+        f"{', '.join(f'{receptors_x[j]:+.2f}' for j in cols)} mm: peaks {peaks} Pa, with the step's datum {shifts} mm "
+        "from the receptor.",
         "step datum minus receptor x [mm]", "SED / its peak",
         [Series(f"receptor at x = {receptors_x[j]:+.2f} mm", rel.tolist(), prof[j].tolist(), "-") for j in cols], rows)

@@ -21,13 +21,13 @@ def add_analyze(p):
     p.add_argument("--receptor-x", type=FINITE, default=0.0, help="lateral receptor position in mm (default 0: "
                                                                   "the central receptor)")
     p.add_argument("--out", help="output folder (default: <first results folder>/analysis)")
-    p.add_argument("--quiet", action="store_true", help="no summary")
+    p.add_argument("--quiet", action="store_true", help="no progress and no summary")
     p.set_defaults(run=_run_analyze)
 
 
 def _run_analyze(args):
     text = run_analyze(args.results, args.neural, out_dir=args.out, diameters_mm=args.diameters,
                        measures=args.measures, fit_on=args.fit_on, orientation=args.orientation,
-                       receptor_x_mm=args.receptor_x)
+                       receptor_x_mm=args.receptor_x, progress=not args.quiet)
     if not args.quiet:
         print(text)

@@ -12,6 +12,7 @@ from fem.io.runfolder import IndentRun
 from fem.receptors.analysis import UnitAnalysis, analyze, as_runs
 from fem.receptors.neural import NeuralData, read_neural_csv
 from fingertip.errors import InputError
+from fingertip.progress import as_progress
 from fingertip.staging import check_output_dir, claimed, staged_output, write_json
 from fingertip.tables import columns_of, write_csv, write_markdown
 
@@ -64,8 +65,9 @@ def write_report(out_dir, runs, neural: NeuralData, results: list[UnitAnalysis],
 
 
 def run_analyze(results, neural_csv, out_dir=None, diameters_mm=None, measures=None, fit_on=None,
-                orientation=None, receptor_x_mm=0.0) -> str:
-    """`pipeline.py analyze`: read runs and recordings, rank, write the report. Returns a summary."""
+                orientation=None, receptor_x_mm=0.0, progress=False) -> str:
+    """`pipeline.py analyze`: read runs and recordings, rank, write the report. Returns a summary.
+    progress: True (on stderr), False, or a progress object: a line per step that takes long."""
     results = [results] if isinstance(results, (str, Path)) else list(results)
     if len(results) > 2:
         raise InputError("give one results folder, or two (2D models of two diameters)")
@@ -73,13 +75,18 @@ def run_analyze(results, neural_csv, out_dir=None, diameters_mm=None, measures=N
         raise InputError("--diameters needs two results folders")
     out = check_output_dir(out_dir if out_dir is not None else Path(results[0]) / "analysis", marker=MARKER,
                            what="analysis")
-    runs = as_runs([IndentRun(r, None if diameters_mm is None else diameters_mm[i]) for i, r in enumerate(results)])
-    neural = read_neural_csv(neural_csv)
+    progress = as_progress(progress)
+    with progress.task("reading the runs and the recordings"):
+        runs = as_runs([IndentRun(r, None if diameters_mm is None else diameters_mm[i])
+                        for i, r in enumerate(results)])
+        neural = read_neural_csv(neural_csv)
     cands = list(measures) if measures else None
     fit = list(fit_on) if fit_on else None
     with claimed(out):
-        res = analyze(runs, neural, cands, fit, receptor_x_mm, orientation)
-        names = write_report(out, runs, neural, res)
+        with progress.task("fitting the receptor model to every candidate"):
+            res = analyze(runs, neural, cands, fit, receptor_x_mm, orientation)
+        with progress.task("writing the report"):
+            names = write_report(out, runs, neural, res)
     lines = [f"receptor analysis in {out}: {', '.join(names)}"]
     for ua in res:
         lines.append(f"  unit {ua.unit}: {len(neural.only(unit=ua.unit))} recorded rates, fit on "

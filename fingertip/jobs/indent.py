@@ -60,7 +60,7 @@ def run_indent(model_dir, out_dir, scene: Scene, progress=True, scheduler=None) 
             run = run_scene(model_dir, scene, store=ResponseStore.existing(model_dir), map=map_, progress=progress)
         for warning in run.warnings:
             logger.warning(warning)
-        tables = _write(out_dir, model_dir, scene, run)
+        tables = _write(out_dir, model_dir, scene, run, progress)
     total = time.perf_counter() - t_start
     model = run.model
     lines = [(f"indentation results in {out_dir} ({total:.1f} s; model {model.ndof} DOFs, "
@@ -73,16 +73,16 @@ def run_indent(model_dir, out_dir, scene: Scene, progress=True, scheduler=None) 
     return Indented("\n".join(lines), tables)
 
 
-def _write(out_dir, model_dir, scene: Scene, run) -> dict:
+def _write(out_dir, model_dir, scene: Scene, run, progress) -> dict:
     """The run folder of a scene run, replacing an earlier one as a whole; returns its tables."""
     with staged_output(out_dir, replace=True) as tmp:
-        tables = write_run(tmp, model_dir, run, run.afferents)
+        tables = write_run(tmp, model_dir, run, run.afferents, progress)
         if scene.output.plots:
             from fem import (
                 plots,  # matplotlib: 0.4 s of import, which a run without figures does without
             )
 
-            for e in run.experiments:
+            for e in progress.bar(run.experiments, desc="figures", unit="experiment"):
                 for name, fig in plots.indent_figures(e, run, tables[e.name]).items():
                     plots.save(fig, tmp / name)
                 if e.name in run.afferents[1]:
