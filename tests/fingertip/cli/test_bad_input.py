@@ -131,7 +131,7 @@ def test_indent_scene_types_checked_before_the_model(work, tmp_path):
     (["fit-material", "{model}", "--force", "{data}/synthetic_force_depth_plate.csv", "--bounds", "7", "1"],
      "--bounds"),
     (["line-load", "{model}", "--step", "0"], "--step"),
-    (["line-load", "{model}", "--material", "m4"], "material code"),
+    (["line-load", "{model}", "--material", "m4"], "--material m4 has 1 digit"),
     (["contact-series", "{model}", "--force", "0"], "forces"),
     (["contact-series", "{model}", "--depth", "1", "--cylinders", "C9"], "cylinder"),
     (["contact-series", "{model}", "--force", "0.01", "--axis", "diagonal"], "orientation"),

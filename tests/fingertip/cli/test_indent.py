@@ -147,7 +147,7 @@ def test_3d_block_model_folder(tmp_path):
                                                                  "volar": r["ymax"].astype(np.uint8)}))
     out = tmp_path / "out"
     assert pipeline.main(["indent", str(model_dir), "--indentor", "sphere:3", "--depth", "0.1,0.2",
-                          "--material", "m33338", "--out", str(out), "--quiet"]) == 0
+                          "--material", "m3", "--out", str(out), "--quiet"]) == 0
     rows = csv_rows(out / "sphere_3.csv")
     assert 0 < float(rows[0]["force_N"]) < float(rows[1]["force_N"])
     assert all(r["kkt_ok"] == "True" for r in rows)
