@@ -276,6 +276,8 @@ class ContactResult:
     _observed: np.ndarray | None = field(default=None, repr=False)
     _source: ContactModel | None = field(default=None, repr=False)
     _unseen: np.ndarray | None = field(default=None, repr=False)    # candidates outside the reach
+    elastic_force_N: np.ndarray | None = field(default=None, repr=False)   # viscoelastic: (m,) the elastic
+                                    # forces, whose displacement field the result has (None: elastic)
 
     @property
     def gap_mm(self) -> np.ndarray:

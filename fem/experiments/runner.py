@@ -27,6 +27,7 @@ from fem.core.fields import centroid_jacobians
 from fem.core.materials import FLUID_LAYER
 from fem.experiments.response import ResponseStore, contact_model, stored_responses
 from fem.experiments.scene import AXES, Experiment, Receptors, Scene, line_text
+from fem.experiments.viscoelastic import elastic_indentations, relaxed_steps
 from fem.io.modelfolder import (
     CONDENSE_MAX_NODES,
     CONTACT_REGION,
@@ -69,6 +70,7 @@ class ExperimentRun:
     seconds: float = 0.0
     tissue_mm: float = float("inf")     # the tissue over the bone along its approach (`tissue_limit_mm`)
     validity: dict | None = None        # the linear result's range (`linear_validity`), run.json's "validity"
+    viscoelastic: dict | None = None    # a relaxed time course's method and forces (run.json's "viscoelastic")
 
     @property
     def name(self) -> str:
@@ -203,7 +205,9 @@ def run_experiments(model, info, scene: Scene, progress=None, store=None, only: 
     receptor measures are then answered by its response models (built and stored when missing,
     `fem.experiments.response.stored_responses`); such a run has no full displacement fields (no PVD).
     only: index of the one experiment to indent (`run_experiment`); the model is still
-    factorised for every candidate the whole scene can reach, so its numbers are the full run's."""
+    factorised for every candidate the whole scene can reach, so its numbers are the full run's.
+    With the scene's [viscoelastic] law, traced experiments are solved elastically
+    (`fem.experiments.viscoelastic.elastic_indentations`) and relaxed in time (`relaxed_steps`)."""
     progress = as_progress(progress)
     sn, runs, warnings, touched, line, grid = _plan(model, info, scene)
     rc = scene.receptors
@@ -218,9 +222,10 @@ def run_experiments(model, info, scene: Scene, progress=None, store=None, only: 
         responses, sampler, used = stored_responses(store, model, [r.indentor.approach for r in runs], grid,
                                                     touched, progress)
         cm, system = contact_model(model, sn, responses), None
+    law = scene.viscoelastic
     todo = [(run, off, load) for k, run in enumerate(runs) if only is None or k == only
-            for off, load in run.experiment.indentations]
-    _check_forces(cm, runs if only is None else [runs[only]])
+            for off, load in elastic_indentations(run.experiment, law)]
+    _check_forces(cm, todo)
     solved = {}                       # a trace repeats indentations (a hold): each is solved once
     for i, (run, off, load) in enumerate(progress.bar(todo, desc="indentations", unit="indentation")):
         t0 = time.perf_counter()
@@ -233,6 +238,8 @@ def run_experiments(model, info, scene: Scene, progress=None, store=None, only: 
                 system.restart_refinement()             # the serial run writes its tasks' bytes
             cm.observe_pending()      # one block per experiment, as a task of `run_experiment` does
             run.validity = linear_validity(run, sampler, cm if system is not None else None, model)
+            if law is not None and run.experiment.trace is not None:
+                run.steps, run.viscoelastic = relaxed_steps(run.steps, run.experiment, law, sampler.sizes)
             if system is not None:
                 system.restart_refinement()
             cm.restart()
@@ -332,23 +339,27 @@ def assemble_run(model, info, scene: Scene, runs: list, progress=None) -> SceneR
                     warnings)
 
 
-def _check_forces(cm: ContactModel, runs) -> None:
+def _check_forces(cm: ContactModel, todo) -> None:
     """Refuse a force that is not reached at its depth limit before the indentations start: the
-    full force at the first position of each force-controlled experiment."""
-    for run in runs:
+    full force of each force-controlled experiment, or the largest of its indentations `todo`
+    [(run, offset, load)] where viscoelastic layers creep, at its first position."""
+    for run in {id(r): r for r, _, _ in todo}.values():
         exp = run.experiment
         if exp.force_N is None:
             continue
+        target = max(exp.force_N, *(load.get("force_N", 0.0) for r, _, load in todo if r is run))
         force = cm.force_at(run.indentor.shifted(exp.offsets_mm[0]), exp.max_depth_mm, exp.equal_force)
-        if force is None or np.all(force >= exp.force_N * (1 - 1e-6)):
+        if force is None or np.all(force >= target * (1 - 1e-6)):
             continue
         unit = "N/mm" if cm.points_mm.shape[1] == 2 else "N"
         there = f"the force there is {', '.join(f'{f:.4g}' for f in force)} {unit}"
+        given = f"force_N {exp.force_N:g} {unit}" + (f" (creeping: the elastic model needs {target:.4g} {unit})"
+                                                    if target > exp.force_N * (1 + 1e-9) else "")
         if exp.max_depth_mm >= run.tissue_mm:
-            raise InputError(f"experiment '{exp.name}': force_N {exp.force_N:g} {unit} is not reached within the "
+            raise InputError(f"experiment '{exp.name}': {given} is not reached within the "
                              f"{run.tissue_mm:g} mm of tissue over the bone of this model ({there}): give a "
                              f"smaller force_N")
-        raise InputError(f"experiment '{exp.name}': force_N {exp.force_N:g} {unit} is not reached within "
+        raise InputError(f"experiment '{exp.name}': {given} is not reached within "
                          f"max_depth_mm {exp.max_depth_mm:g} mm ({there}): lower force_N or raise max_depth_mm "
                          f"(up to the {run.tissue_mm:g} mm of tissue over the bone)")
 

@@ -2,6 +2,9 @@
 
     material = "m43338"                  # optional: material code or [E1, E2, ...] MPa (default: the model's)
     nu = 0.48                            # optional: Poisson ratio (default: the model's)
+    [viscoelastic]                       # optional: every layer relaxes (fem.core.viscoelastic)
+    g = [0.2, 0.2, 0.2]                  # weights of the Prony terms (required: from your measurement)
+    tau_s = [0.004, 0.07, 1.4]           # relaxation times, s (default: Pawluk and Howe 1999)
     [receptors]                          # optional
     depths_mm = [0.5, 0.75, 1.0]         # or "0.5:1:0.25", "0.5,1", 0.75
     spacing_mm = 1.0
@@ -44,6 +47,7 @@ from fem.contact.indentors import orientation_deg, shapes_for
 from fem.contact.linear import MAX_DEPTH_MM
 from fem.core.materials import DEFAULT_CODE, DEFAULT_NU, Material
 from fem.core.measures import check_names
+from fem.core.viscoelastic import PAWLUK_HOWE_TAU_S, Prony
 from fem.experiments.traces import check, fractions
 from fem.receptors.grid import DEFAULT_DEPTHS_MM, DEFAULT_MEASURES
 from fem.receptors.transduction import class_data
@@ -391,6 +395,26 @@ class Afferents:
 
 
 @dataclass(frozen=True)
+class Viscoelastic:
+    """[viscoelastic]: every layer's moduli relax by one Prony series (fem.core.viscoelastic.Prony)."""
+    g: tuple = _key("", _values, None, "weights of the terms (> 0, sum < 1; 1 - sum: the relaxed fraction); "
+                    "required: no published fingerpad weights are built in")
+    tau_s: tuple = _key("s", _values, lambda: PAWLUK_HOWE_TAU_S, "relaxation times (distinct, > 0)")
+
+    @classmethod
+    def law(cls, value, key, where) -> Prony | None:
+        """The Prony law of a scene's [viscoelastic] table (g required, tau_s optional)."""
+        if not isinstance(value, dict):
+            raise _bad(key, where, "a [viscoelastic] table with the weights g (and tau_s)", value)
+        kw = _parse_table(cls, value, "[viscoelastic]")
+        if kw.get("g") is None:
+            raise InputError(f"{where}: [viscoelastic] needs the weights g of its relaxation times tau_s "
+                             f"(default {list(PAWLUK_HOWE_TAU_S)} s), e.g. g = [0.2, 0.2, 0.2] from your "
+                             "relaxation measurement; no published fingerpad weights are built in")
+        return Prony(**kw)
+
+
+@dataclass(frozen=True)
 class Experiment:
     """[[experiment]]: one indentor, placed, at depths or a force, possibly swept."""
     name: str = _key("", _text, None, "file stem of its outputs (default experiment<k>)")
@@ -508,6 +532,9 @@ class Scene:
                                         "modulus in Pa), or moduli per layer in MPa", text=str,
                                         default_text="the model's")
     nu: float | None = _key("", _number, None, "Poisson ratio", text=nonnegative, default_text="the model's")
+    viscoelastic: Prony | None = _key(  # noqa: RUF009
+        "", Viscoelastic.law, None, "[viscoelastic] table: every layer relaxes (traced experiments only)",
+        default_text="elastic")
     receptors: Receptors = _key("", lambda v, key, where: Receptors.from_dict(v), Receptors, "[receptors]")  # noqa: RUF009
     output: Output = _key("", lambda v, key, where: Output.from_dict(v), Output, "[output]")  # noqa: RUF009
     afferents: Afferents | None = _key("", lambda v, key, where: Afferents.from_dict(v), None, "[afferents]")  # noqa: RUF009
@@ -534,6 +561,8 @@ class Scene:
         if kw.get("afferents") is not None and not any(e.trace is not None for e in experiments):
             raise InputError(f"{source}: [afferents] spike over time; give an experiment a time course "
                              f"([experiment.trace], e.g. shape = \"ramp_hold\")")
+        if kw.get("viscoelastic") is not None:
+            _check_viscoelastic(source, experiments, kw.get("afferents"))
         scene = cls(experiments=experiments, **kw)
         scene.check_count()
         return scene
@@ -558,6 +587,19 @@ class Scene:
         if self.afferents is not None and dim != 3:
             raise InputError("[afferents] lie over a pad: they need a 3D model (mesh a preset or a "
                              "reconstruction in 3D); a 2D section has no pad area")
+
+
+def _check_viscoelastic(source: str, experiments, afferents) -> None:
+    """InputError for what viscoelastic layers cannot answer: an experiment without a time course
+    (relaxation needs one) or afferents driven by the strain energy density (the correspondence
+    principle relaxes stresses, not sigma:eps)."""
+    untimed = [e.name for e in experiments if e.trace is None]
+    if untimed:
+        raise InputError(f"{source}: [viscoelastic] layers relax over time, but experiment '{untimed[0]}' has no "
+                         f"time course: give it an [experiment.trace] or leave out viscoelastic")
+    if afferents is not None and afferents.input != "stress":
+        raise InputError(f'{source}: [afferents] input = "{afferents.input}" with [viscoelastic] layers: only '
+                         f'stresses relax (fem.experiments.viscoelastic); use input = "stress"')
 
 
 def load_scene(path, max_indentations: int | None = None) -> Scene:

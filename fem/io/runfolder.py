@@ -39,7 +39,9 @@ RECEPTOR_COLUMNS = ("step", "site", "x_mm", "y_mm", "z_mm", "depth_mm")
 def experiment_record(run) -> dict:
     """run.json entry of one experiment (fem.experiments.runner.ExperimentRun): indentor (code, shapes,
     diameter where it has one), placement, sweep axis and offsets (mm), loading, and whether its
-    linear results are within their range (`validity`, fem.experiments.runner.linear_validity)."""
+    linear results are within their range (`validity`, fem.experiments.runner.linear_validity);
+    a viscoelastic time course adds its method and forces (`viscoelastic`,
+    fem.experiments.viscoelastic.record)."""
     exp, place, ind = run.experiment, run.placement, run.indentor
     shapes = [{"shape": type(p).__name__, **{k: (None if v == np.inf else v) for k, v in asdict(p).items()}}
               for p in ind.parts]
@@ -62,6 +64,7 @@ def experiment_record(run) -> dict:
             "sweep": None if axis is None else {"axis": "xyz"[axis], "offsets_mm": offsets[:, axis].tolist()},
             "loading": loading, "indentations": len(exp.indentations),
             "validity": getattr(run, "validity", None),
+            **({"viscoelastic": run.viscoelastic} if getattr(run, "viscoelastic", None) else {}),
             "files": [f"{exp.name}.csv", f"{exp.name}_surface.csv", f"{exp.name}_receptors.csv"]}
 
 
@@ -77,6 +80,7 @@ def run_record(model_dir, scene_run) -> dict:
         version = None
     mat = model.material
     nus = set(mat.nu.values())
+    law = scene_run.scene.viscoelastic
     return {"format": RUN_FORMAT, "package": "fingertip-fem", "version": version,
             "model": {"folder": str(folder), "dim": model.dim, "preset": info.get("preset"),
                       "model_json_sha256": hashlib.sha256(info_file.read_bytes()).hexdigest()
@@ -84,6 +88,7 @@ def run_record(model_dir, scene_run) -> dict:
                       "diameter_mm": info.get("params", {}).get("diameter_mm"), "dofs": int(model.ndof)},
             "material": mat.code, "E_MPa": {str(k): v for k, v in sorted(mat.E_MPa.items())},
             "nu": nus.pop() if len(nus) == 1 else {str(k): v for k, v in sorted(mat.nu.items())},
+            **({"viscoelastic": law.record()} if law is not None else {}),
             "receptors": {"depths_mm": np.unique(grid.depth_mm).tolist(),
                           "spacing_mm": float(scene_run.scene.receptors.spacing_mm),
                           "line": None if line is None else ["xyz"[line[0]], line[1]],
@@ -239,9 +244,11 @@ def pvd_times(run) -> tuple[list[float], str]:
 
 def _write_pvd(folder, run, scene_run, progress) -> None:
     """<name>_<step>.vtu with the full fields of every indentation and the <name>.pvd series, its
-    timestep values as `pvd_times` says."""
+    timestep values as `pvd_times` says. A viscoelastic step's fields are its elastic solution's:
+    its displacements and strains, not its relaxed stresses."""
     comp = scene_run.contact.compliance(run.indentor.approach)
-    U = comp.displacement(np.stack([r.force_N for _, r in run.steps], axis=1))   # one solve, k loads
+    forces = [r.force_N if r.elastic_force_N is None else r.elastic_force_N for _, r in run.steps]
+    U = comp.displacement(np.stack(forces, axis=1))                              # one solve, k loads
     names = [f"{run.name}_{i:03d}.vtu" for i in range(len(run.steps))]
     with ThreadPoolExecutor(max_workers=2) as pool:     # files compress in parallel (zlib frees the GIL)
         writes = [pool.submit(write_mesh, folder / name, vtu_mesh(scene_run.model.solution(U[:, i])))

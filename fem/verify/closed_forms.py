@@ -1,4 +1,5 @@
-"""Closed-form elasticity solutions and the structured meshes used to verify the solver against them.
+"""Closed-form elasticity (and standard linear solid) solutions and the structured meshes used to
+verify the solver against them.
 
 Units mm, N, MPa; stresses tension-positive. Half-space problems use the project's axes: the
 surface is y = 0, the body is y < 0, and the load pushes along -y (as an indentor does).
@@ -264,6 +265,30 @@ def beam_deflection(x_mm, d0_mm, Lb_mm):
     (thesis eq. 6.2): delta = d0 [0.5 (x/Lb)^3 - 1.5 (x/Lb) + 1] for |x| <= Lb, 0 beyond [mm]."""
     s = np.abs(np.asarray(x_mm, dtype=float)) / Lb_mm
     return np.where(s <= 1.0, d0_mm * (0.5 * s**3 - 1.5 * s + 1), 0.0)
+
+
+# --------------------------------------------------------------------------- standard linear solid
+def sls_relaxation(t_s, g_inf, tau_s):
+    """Relaxation modulus of a standard linear solid over its instantaneous one, g(t) = g_inf +
+    (1 - g_inf) exp(-t / tau): the response to a unit step strain at t = 0 (t_s >= 0, s)."""
+    t = np.asarray(t_s, float)
+    return g_inf + (1.0 - g_inf) * np.exp(-t / tau_s)
+
+
+def sls_creep(t_s, g_inf, tau_s):
+    """Creep compliance of a standard linear solid times its instantaneous modulus, J(t) G0 =
+    1 / g_inf - (1 / g_inf - 1) exp(-g_inf t / tau): the strain under a unit step stress at t = 0
+    over the instantaneous strain (retardation time tau / g_inf)."""
+    t = np.asarray(t_s, float)
+    return 1.0 / g_inf - (1.0 / g_inf - 1.0) * np.exp(-g_inf * t / tau_s)
+
+
+def sls_ramp_hold(t_s, ramp_s, g_inf, tau_s):
+    """Stress of a standard linear solid under a strain ramped linearly from 0 at t = 0 to 1 at
+    ramp_s and held, over the instantaneous modulus: (1 / ramp_s) int_0^min(t, ramp_s) g(t - s) ds."""
+    t = np.asarray(t_s, float)
+    u = np.minimum(t, ramp_s)
+    return (g_inf * u + (1.0 - g_inf) * tau_s * (np.exp(-(t - u) / tau_s) - np.exp(-t / tau_s))) / ramp_s
 
 
 # --------------------------------------------------------------------------- flat punch (Sneddon 1946)
