@@ -11,8 +11,9 @@ def add_reproduce(p):
     """The `reproduce` command's arguments on its parser `p`."""
     p.add_argument("--out", required=True, help="report folder (new, empty, or an earlier reproduce run "
                                                 "of the same kind to resume)")
-    p.add_argument("--quick", action="store_true", help="coarse meshes (0.25 mm in the top 1 mm instead "
-                                                        "of the thesis's 0.125 mm)")
+    p.add_argument("--quick", action="store_true", help="the two coarsest mesh levels (2D 0.25 and 0.125 mm, 3D "
+                                                        "1.5 and 1 mm) instead of the two finest (0.125 and "
+                                                        "0.0625 mm, 1 and 0.5 mm)")
     p.add_argument("--quiet", action="store_true", help="no progress and no summary")
     p.set_defaults(run=_run_reproduce, kept=kept)
 
