@@ -83,8 +83,7 @@ def one(model: str, size_mm: float, work: Path, variants: list) -> list[dict]:
     build_folder(folder, spec, force=True)
     mesh_s = time.perf_counter() - t0
     mesh = json.loads((folder / "model.json").read_text())["mesh"]
-    fine_edge_mm = (mesh["top_zone"]["median_edge_mm"] if model == "2d"
-                    else mesh["sizing_achieved"]["fine_zone_median_edge_mm"])
+    fine_edge_mm = mesh["sizing_achieved"]["fine_zone_median_edge_mm"]
     rows = []
     for label, material, nu in variants:
         t0 = time.perf_counter()

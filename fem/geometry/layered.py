@@ -39,6 +39,10 @@ from fingertip.declare import declared, finite, nonnegative, positive
 from fingertip.errors import InputError
 
 N_LAYERS = 5
+REFERENCE_RAYS = 64
+"""Rays on which `LayeredModel.rays_for` measures the facets of the outer surface."""
+MAX_RAYS = 4096
+"""Most rays per section a resampled model has (`LayeredModel.rays_for`)."""
 #: Per-preset layer-3 thickness and bone offset (not in the thesis; the monkey section is too thin
 #: for the human values: its dorsal half-height is 2.5 mm, the human's 5.0 mm).
 PRESET_PARAMS = {
@@ -105,7 +109,9 @@ class ModelParams:
     support_incline_deg: angle of the support plane to the horizontal, positive with the distal
         end lower (-30 for the thesis's platform, distal end up); the support normal in the finger frame is +y (the finger lies on it), and
         `vertical_up` in model.json is +y turned by this angle about x (distal end lower).
-    n_theta: rays per section.
+    n_theta: rays per section of the model; a mesh resamples the sections on more rays
+        (`LayeredModel.resampled`, `LayeredModel.rays_for`) so that its surface facets are well below
+        its element size.
     tip_mm: length (mm) of the rounded distal tip beyond the last section; 0: a flat distal cut (the
         thesis's model); None: the length of the data (`model_from_args`: the preset's cap, or the
         sections beyond the body).
@@ -173,7 +179,8 @@ class ModelParams:
 @dataclass
 class LayeredModel:
     """The layered solid. z_mm: (K,); rings: (K, 5, N, 2) interface curves (x, y) in mm;
-    centroids: (K, 2) section centroids (the ray origin)."""
+    centroids: (K, 2) section centroids (the ray origin); polygons: the K checked section outlines
+    the rings sample (so that `resampled` gives the same model on more rays)."""
     z_mm: np.ndarray
     rings: np.ndarray
     centroids: np.ndarray
@@ -181,6 +188,40 @@ class LayeredModel:
     preset: str | None = None
     sections_sha256: str = ""
     derived: dict = field(default_factory=dict)
+    polygons: list = field(default_factory=list, repr=False)
+
+    # ------------------------------------------------------------------ resolution
+    def rays_for(self, facet_mm: float) -> int:
+        """Rays per section (a multiple of 8, at least n_theta, at most MAX_RAYS) for which the
+        longest facet of the outer surface is about facet_mm (within 5 %): estimated from the facets
+        on REFERENCE_RAYS rays of the sections, so the answer does not depend on the rays the model has."""
+        K, N = len(self.polygons), REFERENCE_RAYS
+        u = _ray_directions(N)
+        longest = 0.0
+        for p, c in zip(self.polygons, self.centroids):
+            ring = c + _ray_exit(p, c, u, 0.0)[:, None] * u
+            longest = max(longest, float(np.linalg.norm(np.roll(ring, -1, axis=0) - ring, axis=1).max()))
+        need = 8 * int(np.ceil(N * longest / facet_mm / 8)) if K else 0
+        return int(min(MAX_RAYS, max(self.params.n_theta, need)))
+
+    def resampled(self, n_theta: int) -> LayeredModel:
+        """The same model (its scale factors kept) on n_theta rays per section: every ring again
+        the exact ray exits of its section's outline and its offsets."""
+        if n_theta == self.rings.shape[2]:
+            return self
+        return _layered(self.z_mm, self.polygons, self.centroids, replace(self.params, n_theta=int(n_theta)),
+                        self.derived, self.preset, self.sections_sha256)
+
+    def section_rings(self, z_mm: float, n_theta: int) -> tuple[np.ndarray, np.ndarray]:
+        """((5, n_theta, 2) rings, (2,) centroid) of the cross-section at z_mm (within the sections):
+        the two neighbouring sections on n_theta rays, interpolated linearly, as the prisms between
+        them are."""
+        z = self.z_mm
+        k = int(np.clip(np.searchsorted(z, z_mm) - 1, 0, len(z) - 2))
+        w = (z_mm - z[k]) / (z[k + 1] - z[k])
+        u, skin = _ray_directions(int(n_theta)), _skin_depths(self.params)
+        rings = [_section_rings(self.polygons[j], self.centroids[j], u, skin, self.derived, j, z[j]) for j in (k, k + 1)]
+        return (1 - w) * rings[0] + w * rings[1], (1 - w) * self.centroids[k] + w * self.centroids[k + 1]
 
     # ------------------------------------------------------------------ surfaces
     @property
@@ -376,21 +417,13 @@ def build_model(z_mm, polygons, params: ModelParams = ModelParams(), preset: str
     chosen = {k: v for k, v in size_defaults(middle_width).items() if k in unset}
     params = replace(params, **chosen)
     N = params.n_theta
-    theta = 2 * np.pi * np.arange(N) / N
-    u = np.column_stack([np.cos(theta), np.sin(theta)])
-    skin = (0.0, params.epidermis_mm, params.epidermis_mm + params.dermis_mm)
+    u = _ray_directions(N)
+    skin = _skin_depths(params)
     K = len(z)
-    rings = np.zeros((K, N_LAYERS, N, 2))
     cents = np.array([_centroid(p) for p in polys])
-    for k, (p, c) in enumerate(zip(polys, cents)):
-        for i, d in enumerate(skin):
-            t = _ray_exit(p, c, u, d)
-            if np.any(t <= 1e-6):
-                raise InputError(f"section at z={z[k]:g} mm: the skin (epidermis + dermis = {skin[2]:g} mm) is "
-                                 "thicker than the section; use thinner layers or a shorter z range")
-            rings[k, i] = c + t[:, None] * u
+    outer = np.array([_skin_rings(p, c, u, skin, zi)[0] for p, c, zi in zip(polys, cents, z)])     # (K, N, 2)
     # thesis scaling: f3 = thickness / section thickness at three reference sections
-    r0 = np.linalg.norm(rings[:, 0] - cents[:, None], axis=-1)                 # (K, N)
+    r0 = np.linalg.norm(outer - cents[:, None], axis=-1)                       # (K, N)
     volar = N // 4                                                            # ray towards +y
     volar_thick = np.array([np.interp(zr, z, r0[:, volar]) for zr in ref_z])
     if params.layer3_scale is not None:
@@ -400,31 +433,64 @@ def build_model(z_mm, polygons, params: ModelParams = ModelParams(), preset: str
     if f3 >= 1:
         raise InputError(f"layer 3 ({params.layer3_mm} mm) plus skin is thicker than the section "
                          f"(volar half-thickness {volar_thick.min():.2f} mm); use a smaller layer3_mm")
-    rings[:, 3] = cents[:, None] + (1 - f3) * (rings[:, 0] - cents[:, None])
     # bone: scaled copy of the profile, shifted towards the nail
-    width = np.ptp(rings[:, 0, :, 0], axis=1)
+    width = np.ptp(outer[..., 0], axis=1)
     s = (z - z[0]) / (z[-1] - z[0])
     if params.bone_profile is None:
         ratio = np.full(K, params.bone_diameter_mm / np.interp(ref_z[1], z, width))
     else:
         prof = np.asarray(params.bone_profile, float)
         ratio = np.interp(s, prof[:, 0], prof[:, 1])
-    shift = np.array([0.0, -params.bone_offset_mm])
-    rings[:, 4] = cents[:, None] + shift + ratio[:, None, None] * (rings[:, 0] - cents[:, None])
-    min_thick = _check_nesting(z, rings, cents)
-    derived = {"f3": f3, "ref_z": ref_z, "bone_ratio": ratio.tolist(),
-               "bone_shift": [shift.tolist()] * K,
+    shift = [0.0, -params.bone_offset_mm]
+    derived = {"f3": f3, "ref_z": ref_z, "bone_ratio": ratio.tolist(), "bone_shift": [shift] * K,
                "bone_width_range": [float((ratio * width).min()), float((ratio * width).max())],
-               "min_thickness": min_thick,
                "size_defaults": {"middle_width_mm": middle_width, "chosen": chosen}}
     if params.tip_mm is None:
         raise InputError("tip_mm None (the data's tip length) is resolved by model_from_args; give a length")
+    return _layered(z, polys, cents, params, derived, preset, sections_sha256)
+
+
+def _layered(z, polys, cents, params: ModelParams, derived: dict, preset, sections_sha256) -> LayeredModel:
+    """The model of checked sections with their scale factors (derived f3, bone_ratio, bone_shift):
+    the rings on params.n_theta rays, nesting checked, the domes of a rounded tip."""
+    N, skin = params.n_theta, _skin_depths(params)
+    u = _ray_directions(N)
+    rings = np.array([_section_rings(p, c, u, skin, derived, k, zk)
+                      for k, (p, c, zk) in enumerate(zip(polys, cents, z))])
+    derived = {**derived, "min_thickness": _check_nesting(z, rings, cents)}
     if params.tip_mm > 0:
-        derived.update(_dome_lengths(params.tip_mm, skin, f3, ratio[-1], rings[-1, 0], cents[-1], N))
-    model = LayeredModel(z, rings, cents, params, preset, sections_sha256, derived)
+        derived.update(_dome_lengths(params.tip_mm, skin, derived["f3"], derived["bone_ratio"][-1], rings[-1, 0],
+                                     cents[-1], N))
+    model = LayeredModel(z, rings, cents, params, preset, sections_sha256, derived, polys)
     if model.rounded:
         derived["min_thickness_tip"] = _check_dome_nesting(model)
     return model
+
+
+def _skin_depths(params: ModelParams) -> tuple:
+    """Depths (mm) of rings 0-2 below the outer surface."""
+    return (0.0, params.epidermis_mm, params.epidermis_mm + params.dermis_mm)
+
+
+def _skin_rings(p, c, u, skin, z_mm) -> np.ndarray:
+    """(3, N, 2) rings 0-2 of section p (centroid c) on rays u: exact erosions by the skin depths."""
+    out = np.empty((len(skin), len(u), 2))
+    for i, d in enumerate(skin):
+        t = _ray_exit(p, c, u, d)
+        if np.any(t <= 1e-6):
+            raise InputError(f"section at z={z_mm:g} mm: the skin (epidermis + dermis = {skin[-1]:g} mm) is "
+                             "thicker than the section; use thinner layers or a shorter z range")
+        out[i] = c + t[:, None] * u
+    return out
+
+
+def _section_rings(p, c, u, skin, derived: dict, k: int, z_mm) -> np.ndarray:
+    """(5, N, 2) rings of section k (outline p, centroid c) on rays u: the skin's erosions, ring 0
+    scaled about c by 1 - f3, and the bone: ring 0 scaled by its ratio, shifted towards the nail."""
+    skin_rings = _skin_rings(p, c, u, skin, z_mm)
+    ring3 = c + (1 - derived["f3"]) * (skin_rings[0] - c)
+    bone = c + np.asarray(derived["bone_shift"][k]) + derived["bone_ratio"][k] * (skin_rings[0] - c)
+    return np.concatenate([skin_rings, ring3[None], bone[None]])
 
 
 def _dome_lengths(tip_mm, skin, f3, bone_ratio, outer_ring, centre, N) -> dict:
@@ -473,6 +539,12 @@ def _centroid(p: np.ndarray) -> np.ndarray:
     cr = x * np.roll(y, -1) - np.roll(x, -1) * y
     a = cr.sum() / 2
     return np.array([((x + np.roll(x, -1)) * cr).sum(), ((y + np.roll(y, -1)) * cr).sum()]) / (6 * a)
+
+
+def _ray_directions(n: int) -> np.ndarray:
+    """(n, 2) unit vectors of the rays, from +x counter-clockwise (ray n // 4 towards +y)."""
+    theta = 2 * np.pi * np.arange(n) / n
+    return np.column_stack([np.cos(theta), np.sin(theta)])
 
 
 def _ray_exit(p: np.ndarray, c: np.ndarray, u: np.ndarray, d: float) -> np.ndarray:

@@ -21,8 +21,8 @@ import numpy as np
 from matplotlib.path import Path as MplPath
 from scipy.spatial import Delaunay, cKDTree
 
-from fem.core.materials import DEFAULT_CODE, DEFAULT_NU, FLUID_LAYER, LAYERED_CODE
-from fem.geometry.mesh3d import check_sizes
+from fem.core.materials import DEFAULT_NU, FLUID_LAYER, default_code
+from fem.geometry.mesh3d import check_sizes, in_proportion, sizes_achieved
 from fingertip.declare import declared, positive
 from fingertip.errors import InputError
 from fingertip.progress import as_progress
@@ -30,16 +30,32 @@ from fingertip.staging import staged_output, write_json
 
 #: Solid layer around the fluid core of the solid-fluid cylinders (thesis 4.6), mm.
 SOLID_FLUID_SHELL_MM = 1.0
+PROPORTIONAL_2D = {"coarse_mm": (8.0, 1.0), "growth": (4.0, 0.5)}
+"""2D sizes that follow size_mm when not given (`fem.geometry.mesh3d.in_proportion`): coarse_mm 8
+size_mm, at most 1 mm; growth 4 size_mm per mm, at most 0.5 (the defaults at the default 0.125 mm;
+the lattice's factor-2 steps spoil triangles where the size grows faster)."""
+CAP_SIZE_MM = 0.125
+"""The size_mm (the default) down to which each layer's elements are capped by its thinnest part;
+below it the caps shrink in proportion to size_mm, so a finer mesh refines the thin layers too."""
+SECTION_FACET_MM = 0.015
+"""Longest facet of the curves of a cross-section of the 3D model (`section_domain`): as smooth as
+the presets' circles (2048 points), so the 2D mesher's sampling sets the resolution."""
 
 
 @dataclass(frozen=True)
 class Sizing2D:
     """size_mm in the top fine_depth_mm under the contact surface, growing by `growth` mm per mm
-    of distance from that zone up to coarse_mm (also capped by each layer's thinnest part)."""
+    of distance from that zone up to coarse_mm (also capped by each layer's thickness); coarse_mm
+    and growth in proportion to size_mm unless given."""
     size_mm: float = declared(0.125, "mm", "target edge length on the volar skin (3D) or top surface (2D)", text=positive)
-    coarse_mm: float = declared(1.0, "mm", "largest edge length", text=positive)
-    growth: float = declared(0.5, "mm per mm", "edge length growth per mm away from the fine zone", text=positive)
+    coarse_mm: float | None = declared(None, "mm", "largest edge length", text=positive,
+                                       default_text="8 x size, at most 1")
+    growth: float | None = declared(None, "mm per mm", "edge length growth per mm away from the fine zone",
+                                    text=positive, default_text="4 x size per mm, at most 0.5")
     fine_depth_mm: float = declared(1.0, "mm", "depth of the fine zone below the volar (3D) or top (2D) surface", text=positive)
+
+    def __post_init__(self):
+        in_proportion(self, PROPORTIONAL_2D)
 
     def check(self) -> None:
         check_sizes(self, 0.01, "2D")
@@ -50,7 +66,9 @@ class Domain2D:
     """curves: nested closed CCW polygons (n_i, 2), outermost first; layers[i] is the layer
     number between curve i and curve i+1 (the last: inside the last curve).
     surface(points) / fixed(points) -> bool masks for boundary points; depth(points) -> mm below
-    the contact surface (inf where not under it)."""
+    the contact surface (inf where not under it); breaks: points of the outer curve where a region
+    begins or ends, which the mesher makes mesh vertices (so a region's extent does not depend on
+    the element size there)."""
     name: str
     curves: list
     layers: list
@@ -58,6 +76,7 @@ class Domain2D:
     fixed: object
     depth: object
     params: dict = field(default_factory=dict)
+    breaks: list = field(default_factory=list)
 
 
 # ---------------------------------------------------------------------- domains
@@ -70,6 +89,25 @@ def _angle_mask(points, centre_xy, direction, span_deg):
     d = points - centre_xy
     theta = np.arctan2(d[:, 1], d[:, 0])
     return np.abs(np.angle(np.exp(1j * (theta - direction)))) <= np.deg2rad(span_deg) / 2 + 1e-9
+
+
+def _span_marks(poly, centre_xy, direction, span_deg) -> list:
+    """The points of the closed polygon (star-shaped about centre_xy) at the two ends and the middle
+    of the span `_angle_mask` selects (the middle only for a whole turn): mesh vertices there make a
+    region's extent and its apex (where an indentor first touches) independent of the element size."""
+    half = np.deg2rad(min(span_deg, 360.0)) / 2
+    angles = [direction] if span_deg >= 360 else [direction - half, direction, direction + half]
+    a, e = poly, np.roll(poly, -1, axis=0) - poly
+    r = a - np.asarray(centre_xy, float)
+    out = []
+    for angle in angles:
+        u = np.array([np.cos(angle), np.sin(angle)])
+        den = u[0] * e[:, 1] - u[1] * e[:, 0]                  # c + t u = a + s e, solved for t and s
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t, s = (r[:, 0] * e[:, 1] - r[:, 1] * e[:, 0]) / den, (r[:, 0] * u[1] - r[:, 1] * u[0]) / den
+        t = np.where((s >= 0) & (s <= 1) & (t > 0), t, np.inf)
+        out.append(np.asarray(centre_xy, float) + t.min() * u)
+    return out
 
 
 def preset_domain(name: str, bone: bool = False, solid_fluid: bool = False) -> Domain2D:
@@ -89,13 +127,15 @@ def preset_domain(name: str, bone: bool = False, solid_fluid: bool = False) -> D
         core = [_circle(1.0, n=512)] if bone else [_circle(R - SOLID_FLUID_SHELL_MM)] if solid_fluid else []
         up = lambda p: _angle_mask(p, (0, 0), np.pi / 2, 180.0)  # noqa: E731
         layers = [1, 5] if bone else [1, FLUID_LAYER] if solid_fluid else [1]
-        return Domain2D(name + ("_bone" if bone else "_fluid" if solid_fluid else ""), [_circle(R)] + core, layers,
+        outer = _circle(R)
+        return Domain2D(name + ("_bone" if bone else "_fluid" if solid_fluid else ""), [outer] + core, layers,
                         surface=up, fixed=lambda p: _angle_mask(p, (0, 0), -np.pi / 2, 120.0),
                         depth=lambda p: np.where(up(p), R - np.hypot(p[:, 0], p[:, 1]), np.inf),
                         params={"diameter_mm": 2 * R, "bone_diameter_mm": 2.0 if bone else None,
                                 "fluid_core_diameter_mm": 2 * (R - SOLID_FLUID_SHELL_MM) if solid_fluid else None,
                                 "fixed": "bottom third of the circumference (120 deg about -y)",
-                                "surface": "upper half of the circumference"})
+                                "surface": "upper half of the circumference"},
+                        breaks=_span_marks(outer, (0, 0), -np.pi / 2, 120.0) + _span_marks(outer, (0, 0), np.pi / 2, 180.0))
     raise InputError(f"unknown 2D preset '{name}': use block, square, cylinder8 or cylinder16")
 
 
@@ -117,14 +157,12 @@ def rectangle_domain(name: str, width_mm: float, height_mm: float, held_sides: b
 
 
 def section_domain(model, z_mm: float) -> Domain2D:
-    """Five-layer cross-section of the 3D model at z (rings interpolated between sections)."""
+    """Five-layer cross-section of the 3D model at z: its rings on rays dense enough for facets of
+    at most SECTION_FACET_MM (`fem.geometry.layered.LayeredModel.section_rings`)."""
     z = model.z_mm
     if not z[0] <= z_mm <= z[-1]:
         raise InputError(f"--section-z {z_mm} is outside the model ({z[0]:g} to {z[-1]:g} mm)")
-    k = int(np.clip(np.searchsorted(z, z_mm) - 1, 0, len(z) - 2))
-    w = (z_mm - z[k]) / (z[k + 1] - z[k])
-    rings = (1 - w) * model.rings[k] + w * model.rings[k + 1]
-    c = (1 - w) * model.centroids[k] + w * model.centroids[k + 1]
+    rings, c = model.section_rings(z_mm, model.rays_for(SECTION_FACET_MM))
     p = model.params
     volar = lambda q: _angle_mask(q, c, np.pi / 2, p.volar_span_deg)  # noqa: E731
 
@@ -138,20 +176,26 @@ def section_domain(model, z_mm: float) -> Domain2D:
                     params={"section_z_mm": z_mm, "centroid_mm": c.tolist(), "preset": model.preset,
                             "fixed": f"nail span {p.nail_span_deg} deg about -y",
                             "surface": f"volar span {p.volar_span_deg} deg about +y",
-                            "model": {k: v for k, v in model.to_json().items() if k != "regions"}})
+                            "model": {k: v for k, v in model.to_json().items() if k != "regions"}},
+                    breaks=_span_marks(rings[0], c, -np.pi / 2, p.nail_span_deg)
+                    + _span_marks(rings[0], c, np.pi / 2, p.volar_span_deg))
 
 
 # ---------------------------------------------------------------------- geometry helpers
-def _polyline_distance(q: np.ndarray, poly: np.ndarray) -> np.ndarray:
-    """Distance (M,) from points q (M, 2) to the closed polygon poly (n, 2)."""
-    a, b = poly, np.roll(poly, -1, axis=0)
-    ab = b - a
-    out = np.full(len(q), np.inf)
-    for s in range(0, len(q), 4096):
-        qq = q[s:s + 4096, None]
-        t = np.clip(np.einsum("mnk,nk->mn", qq - a, ab) / np.einsum("nk,nk->n", ab, ab), 0, 1)
-        out[s:s + 4096] = np.linalg.norm(qq - (a + t[..., None] * ab), axis=2).min(axis=1)
-    return out
+def _polyline_distance(q: np.ndarray, poly: np.ndarray, near: int = 8) -> np.ndarray:
+    """Distance (M,) from points q (M, 2) to the closed polygon poly (n, 2): to the segments at the
+    `near` vertices nearest each point (all of them for a small polygon), which hold the nearest
+    point of a densely sampled curve."""
+    n = len(poly)
+    ab = np.roll(poly, -1, axis=0) - poly
+    ab2 = np.einsum("nk,nk->n", ab, ab)
+    k = min(near, n)
+    _, idx = cKDTree(poly).query(q, k=k) if k < n else (None, np.broadcast_to(np.arange(n), (len(q), n)))
+    idx = np.asarray(idx).reshape(len(q), -1)
+    seg = np.concatenate([idx, (idx - 1) % n], axis=1)                   # the segments starting and ending there
+    d = q[:, None] - poly[seg]
+    t = np.clip(np.einsum("mjk,mjk->mj", d, ab[seg]) / ab2[seg], 0, 1)
+    return np.linalg.norm(d - t[..., None] * ab[seg], axis=2).min(axis=1)
 
 
 def _inside(q: np.ndarray, poly: np.ndarray) -> np.ndarray:
@@ -205,22 +249,26 @@ def _resample(poly: np.ndarray, step: float) -> np.ndarray:
     return np.column_stack([np.interp(t, s, closed[:, 0]), np.interp(t, s, closed[:, 1])])
 
 
-def _sample_curve(poly: np.ndarray, h_at, cap: float) -> np.ndarray:
-    """Points along a closed polygon spaced by the local target size (capped), keeping corners."""
+def _sample_curve(poly: np.ndarray, h_at, cap: float, breaks=()) -> np.ndarray:
+    """Points along a closed polygon spaced by the local target size (capped): its corners and the
+    break points given on it are samples, and each piece between them is divided evenly."""
     dense = _resample(poly, min(cap, 0.02) / 2)
+    knots = np.vstack([_corners(poly), np.reshape(np.asarray(breaks, float), (-1, 2))])
+    at = np.zeros(0, int)
+    if len(knots):
+        _, at = cKDTree(dense).query(knots)
+        dense[at] = knots                                    # the knots themselves on the dense curve
+        at = np.unique(at)
     h = np.minimum(h_at(dense), cap)
     seg = np.linalg.norm(np.roll(dense, -1, axis=0) - dense, axis=1)
     u = np.concatenate([[0], np.cumsum(seg / h)])          # arc length in units of local size
-    n = max(int(np.round(u[-1])), 8)
-    targets = u[-1] * np.arange(n) / n
-    idx = np.searchsorted(u, targets).clip(0, len(dense) - 1)
-    pts = dense[idx]
-    corners = _corners(poly)
-    if len(corners):
-
-        _, j = cKDTree(pts).query(corners)
-        pts[j] = corners                                     # snap the nearest sample to each corner
-    return pts
+    stretch = max(1.0, 8 / u[-1])                           # at least 8 samples
+    starts = u[at] if len(at) else np.zeros(1)
+    ends = np.append(starts[1:], starts[0] + u[-1])
+    counts = np.maximum(1, np.round(stretch * (ends - starts))).astype(int)
+    targets = np.concatenate([a + (b - a) * np.arange(n) / n for a, b, n in zip(starts, ends, counts)]) % u[-1]
+    idx = np.searchsorted(u, targets - 1e-12).clip(0, len(dense) - 1)
+    return dense[np.unique(idx)]                            # in order along the curve
 
 
 def _corners(poly: np.ndarray) -> np.ndarray:
@@ -234,20 +282,22 @@ def mesh_domain(domain: Domain2D, sizing: Sizing2D):
     """-> (points (P, 2), triangles (T, 3) CCW, layer (T,) int32). Raises RuntimeError if an
     interface is not recovered as mesh edges."""
     sizing.check()
-    caps = _layer_caps(domain)
+    h0 = sizing.size_mm
+    caps = [cap * min(1.0, h0 / CAP_SIZE_MM) for cap in _layer_caps(domain)]
     if len(domain.curves) > 1:
         caps[-1] /= 4                  # innermost disc (bone): keep interior points, no slivers
-    h0 = sizing.size_mm
     # curves first: samples at the local size, capped by the adjacent layers' thinnest part
     samples, spacing = [], []
     for i, c in enumerate(domain.curves):
         cap = min(caps[max(i - 1, 0)], caps[i], _perimeter(c) / 48)   # 48: area error < 0.3 % on a circle
-        s = _sample_curve(c, lambda p: target_size(domain, sizing, p), cap)
+        s = _sample_curve(c, lambda p: target_size(domain, sizing, p), cap, domain.breaks if i == 0 else ())
         samples.append(s)
         seg = np.linalg.norm(np.roll(s, -1, axis=0) - s, axis=1)
         spacing.append(np.maximum(seg, np.roll(seg, 1)))            # longest segment at each sample
     allc, spacing = np.vstack(samples), np.concatenate(spacing)
-    tree = cKDTree(allc)
+    row, row_spacing = _surface_row(samples[0], allc, spacing, domain.surface, h0)
+    tree = cKDTree(np.vstack([allc, row]))
+    spacing = np.concatenate([spacing, row_spacing])
     # nested triangular lattices: keep a lattice-0 point iff it lies on the lattice of its level
     lo, hi = domain.curves[0].min(0), domain.curves[0].max(0)
     a, b = np.array([h0, 0.0]), np.array([h0 / 2, h0 * np.sqrt(3) / 2])
@@ -268,7 +318,7 @@ def mesh_domain(domain: Domain2D, sizing: Sizing2D):
     keep = (I % (2**level) == 0) & (J % (2**level) == 0)
     keep &= d > 0.75 * np.maximum(h, spacing[j])        # > 1/sqrt(2): outside every segment's diametral circle
     q = q[keep]
-    pts = np.vstack([allc, q])
+    pts = np.vstack([allc, row, q])
     tri = Delaunay(pts).simplices
     x = pts[tri]
     area = 0.5 * ((x[:, 1, 0] - x[:, 0, 0]) * (x[:, 2, 1] - x[:, 0, 1])
@@ -279,6 +329,21 @@ def mesh_domain(domain: Domain2D, sizing: Sizing2D):
     tri, layer = tri[ok], centroid_lab[ok].astype(np.int32)
     _check_interfaces(samples, tri)
     return pts, tri, layer
+
+
+def _surface_row(outer: np.ndarray, samples: np.ndarray, spacing: np.ndarray, surface, h0: float):
+    """A row of points under the contact surface: one under the middle of each segment of the outer
+    curve's samples `outer` (CCW) that lies on the surface and is of the fine size h0, at the height
+    of an equilateral triangle on it, so the elements under the contact are regular (the contact
+    pressure of the lattice's irregular triangles along the curve varied by 1 % from node to node);
+    none too near another curve's samples. -> (points, spacing)."""
+    nxt = np.roll(outer, -1, axis=0)
+    t = nxt - outer
+    length = np.linalg.norm(t, axis=1)
+    row = 0.5 * (outer + nxt) + np.sqrt(3) / 2 * np.column_stack([-t[:, 1], t[:, 0]])
+    d, j = cKDTree(samples).query(row)
+    ok = (d > 0.7 * np.maximum(length, spacing[j])) & surface(outer) & surface(nxt) & (length < 1.25 * h0)
+    return row[ok], length[ok]
 
 
 def _check_interfaces(samples: list, tri: np.ndarray) -> None:
@@ -311,18 +376,14 @@ def report2d(domain: Domain2D, sizing: Sizing2D, pts, tri, layer, flags) -> dict
     layers = sorted(set(domain.layers))
     curve_area = [_poly_area(c) for c in domain.curves] + [0.0]
     model_area = {L: curve_area[i] - curve_area[i + 1] for i, L in enumerate(domain.layers)}
-    mean_edge = np.mean(e, axis=0)
-    top = domain.depth(x.mean(axis=1)) <= sizing.fine_depth_mm
+    top = domain.depth(x.mean(axis=1)) <= sizing.fine_depth_mm          # the fine zone: the top fine_depth_mm
     return {
         "domain": domain.name, "points": len(pts), "triangles": len(tri),
         "triangles_per_layer": {str(L): int((layer == L).sum()) for L in layers},
         "layer_areas_mm2": {str(L): float(area[layer == L].sum()) for L in layers},
         "model_layer_areas_mm2": {str(L): float(model_area[L]) for L in layers},
         "min_angle_deg": float(min_ang.min()), "p1_angle_deg": float(np.percentile(min_ang, 1)),
-        "top_zone": {"triangles": int(top.sum()),
-                     "median_edge_mm": float(np.median(mean_edge[top])) if top.any() else None,
-                     "p95_edge_mm": float(np.percentile(mean_edge[top], 95)) if top.any() else None},
-        "elsewhere_max_edge_mm": float(mean_edge[~top].max()) if (~top).any() else None,
+        "sizing_achieved": sizes_achieved(pts, tri, np.mean(e, axis=0), layer, top),
         "regions": {k: int(v.sum()) for k, v in flags.items()},
     }
 
@@ -358,7 +419,7 @@ def run_mesh2d(out_dir, domain: Domain2D, sizing: Sizing2D, progress=None):
                     point_data=flags)
     data = {"kind": "2d plane strain", "units": "mm", "points": "(x, y, 0)", "domain": domain.name,
             "params": domain.params, "layers": domain.layers, "sizing": asdict(sizing),
-            "material": LAYERED_CODE if len(domain.layers) == 5 else DEFAULT_CODE, "nu": DEFAULT_NU,
+            "material": default_code(domain.layers), "nu": DEFAULT_NU,
             "mesh": rep}
     with staged_output(out_dir) as tmp:
         meshio.write(tmp / "mesh.vtu", m)
@@ -367,14 +428,16 @@ def run_mesh2d(out_dir, domain: Domain2D, sizing: Sizing2D, progress=None):
 
 
 def summary(rep: dict, out_dir) -> str:
-    t = rep["top_zone"]
+    a = rep["sizing_achieved"]
     lines = [f"mesh.vtu + model.json in {out_dir}",
              f"  2D {rep['domain']}: {rep['triangles']} triangles, {rep['points']} points",
              "  layer  triangles  area mm2   model mm2"]
     for L, n in rep["triangles_per_layer"].items():
         lines.append(f"  {L:>5} {n:>10} {rep['layer_areas_mm2'][L]:>9.3f} {rep['model_layer_areas_mm2'][L]:>11.3f}")
-    lines += [f"  top zone: {t['triangles']} triangles, median edge {t['median_edge_mm']:.3f} mm "
-              f"(95th pct {t['p95_edge_mm']:.3f}); largest edge elsewhere {rep['elsewhere_max_edge_mm']:.3f} mm",
+    lines += [f"  {a['dofs']} DOFs (P2); top zone: {a['fine_zone_elements']} triangles, median edge "
+              f"{a['fine_zone_median_edge_mm']:.3f} mm (90th pct {a['fine_zone_p90_edge_mm']:.3f}); elsewhere "
+              f"{a['elsewhere_median_edge_mm']:.3f}, largest {a['elsewhere_max_edge_mm']:.3f} mm; per layer "
+              + " ".join(f"{v['median_edge_mm']:.3f}" for v in a["per_layer"].values()) + " mm",
               f"  min angle {rep['min_angle_deg']:.1f} deg (1st pct {rep['p1_angle_deg']:.1f})",
               "  regions: " + ", ".join(f"{k} {v} points" for k, v in rep["regions"].items())]
     return "\n".join(lines)

@@ -32,8 +32,29 @@ from fingertip.progress import as_progress, cache_root
 from fingertip.staging import atomic_write, staged_output, write_json
 
 #: bump when tetrahedralize() changes, so cached meshes are not reused (2: pytetwild reproducible,
-#: one thread and a fixed seed)
-MESHER_VERSION = 2
+#: one thread and a fixed seed; 3: the surfaces resampled on rays for the size, `surface_model`)
+MESHER_VERSION = 3
+PROPORTIONAL = {"coarse_mm": (6.0, 3.0), "growth": (1.0, 1.0), "epsilon_mm": (0.04, 0.02)}
+"""3D sizes that follow size_mm when not given (`in_proportion`): {field: (per mm of size_mm, at
+most)}: coarse_mm 6 size_mm, at most 3 mm; growth size_mm per mm, at most 1; pytetwild's envelope
+0.04 size_mm, at most 0.02 mm (the defaults 3, 0.5 and 0.02 mm at the default 0.5 mm; a wider
+envelope lets tets straddle the layer interfaces)."""
+SURFACE_FACET = 0.5
+"""Longest facet of the model surfaces a mesh is built from, as a fraction of size_mm (`surface_model`)."""
+
+
+def in_proportion(sizing, rules: dict) -> None:
+    """Fill the fields of a sizing not given (None) in proportion to its size_mm, so that a smaller
+    size refines every layer alike: rules {field: (ratio, at most)} gives field = min(ratio
+    size_mm, at most), the bound being what the fingertip models need (a coarser element, a faster
+    growth, a looser envelope only spoil the mesh). Called from the sizings' __post_init__ (frozen
+    dataclasses), so an instance holds the sizes it meshes with."""
+    size = sizing.size_mm
+    if not isinstance(size, (int, float)):
+        return
+    for name, (ratio, most) in rules.items():
+        if getattr(sizing, name) is None:
+            object.__setattr__(sizing, name, float(f"{min(ratio * size, most):.12g}"))
 
 
 @dataclass(frozen=True)
@@ -42,16 +63,21 @@ class Sizing:
 
     size_mm: on the volar skin (top fine_depth_mm, volar_span_deg of the model, fine_z_frac of the
     length); grows by `growth` mm per mm away from it, capped at coarse_mm. epsilon_mm: pytetwild
-    envelope (max distance of the meshed interfaces from the model surfaces). opt_iter: pytetwild
-    optimisation passes.
+    envelope (max distance of the meshed interfaces from the model surfaces). coarse_mm, growth and
+    epsilon_mm follow size_mm unless given (PROPORTIONAL). opt_iter: pytetwild optimisation passes.
     """
     size_mm: float = declared(0.5, "mm", "target edge length on the volar skin (3D) or top surface (2D)", text=positive)
-    coarse_mm: float = declared(3.0, "mm", "largest edge length", text=positive)
-    growth: float = declared(0.5, "mm per mm", "edge length growth per mm away from the fine zone", text=positive)
+    coarse_mm: float | None = declared(None, "mm", "largest edge length", text=positive,
+                                       default_text="6 x size, at most 3")
+    growth: float | None = declared(None, "mm per mm", "edge length growth per mm away from the fine zone",
+                                    text=positive, default_text="size per mm, at most 1")
     fine_depth_mm: float = declared(1.5, "mm", "depth of the fine zone below the volar (3D) or top (2D) surface", text=positive)
     fine_z_frac: tuple = (0.0, 1.0)
-    epsilon_mm: float = 0.02
+    epsilon_mm: float | None = None
     opt_iter: int = 20
+
+    def __post_init__(self):
+        in_proportion(self, PROPORTIONAL)
 
     def check(self) -> None:
         check_sizes(self, 0.1)
@@ -94,6 +120,14 @@ class TetMesh:
 
 
 # ---------------------------------------------------------------------- sizing
+def surface_model(model: LayeredModel, sizing: Sizing) -> LayeredModel:
+    """The model on as many rays as its mesh needs: no facet of the outer surface longer than
+    SURFACE_FACET size_mm (`LayeredModel.rays_for`), so the mesh's surface, not the model's
+    polygons, sets the resolution. The same model for every function here that takes a model and a
+    sizing (resampling an already resampled model returns it)."""
+    return model.resampled(model.rays_for(SURFACE_FACET * sizing.size_mm))
+
+
 def angle_from(theta: np.ndarray, centre: float) -> np.ndarray:
     """Absolute angular distance (rad, 0..pi) of theta from the direction `centre` (rad)."""
     return np.abs(np.angle(np.exp(1j * (theta - centre))))
@@ -141,6 +175,7 @@ def tetrahedralize(model: LayeredModel, sizing: Sizing):
     """Run pytetwild on the merged shells -> (points (P, 3), tets (T, 4)) of the tets inside the
     outer shell, unused points removed."""
     sizing.check()
+    model = surface_model(model, sizing)
     v, f = model.vertices(), model.faces().astype(np.int32)
     diag = float(np.linalg.norm(v.max(0) - v.min(0)))
     bg_p, bg_t, bg_v = background_mesh(model, sizing)
@@ -301,16 +336,36 @@ def bone_offset(model, points, tets, layer, vol) -> float:
 
 
 def achieved_sizes(model: LayeredModel, mesh: TetMesh, sizing: Sizing) -> dict:
-    """Median edge length (mm) of tets in the fine volar zone and in the rest."""
+    """What the mesh achieved (`sizes_achieved`): the fine zone is the tets whose centroid asks for
+    size_mm (the top fine_depth_mm of the volar skin); the model's rays per section besides."""
     c = mesh.points[mesh.tets].mean(axis=1)
-    target = sizing_values(model, sizing, c)
-    fine = target <= sizing.size_mm * 1.001
+    fine = sizing_values(model, sizing, c) <= sizing.size_mm * 1.001
     x = mesh.points[mesh.tets]
     edge = np.mean([np.linalg.norm(x[:, i] - x[:, j], axis=1) for i in range(4) for j in range(i + 1, 4)], axis=0)
-    return {"fine_zone_median_edge_mm": float(np.median(edge[fine])) if fine.any() else None,
-            "fine_zone_tets": int(fine.sum()),
-            "elsewhere_median_edge_mm": float(np.median(edge[~fine])) if (~fine).any() else None,
-            "median_edge_per_layer_mm": [float(np.median(edge[mesh.layer == L])) for L in range(1, N_LAYERS + 1)]}
+    return {**sizes_achieved(mesh.points, mesh.tets, edge, mesh.layer, fine), "rays_per_section": model.rings.shape[2]}
+
+
+def sizes_achieved(points: np.ndarray, cells: np.ndarray, edge: np.ndarray, layer: np.ndarray, fine: np.ndarray) -> dict:
+    """The sizes a user compares meshes by (model.json `sizing_achieved`, 2D and 3D): elements and
+    P2 displacement DOFs (dim x (vertices + edges)), the median and 90th-percentile element edge
+    (`edge`: the mean of each element's edges, mm) in the fine zone (`fine`, per element),
+    elsewhere and in each layer."""
+    def stats(mask):
+        e = edge[mask]
+        return (int(mask.sum()), float(np.median(e)) if len(e) else None,
+                float(np.percentile(e, 90)) if len(e) else None)
+
+    dim = cells.shape[1] - 1
+    pairs = np.vstack([cells[:, [i, j]] for i in range(dim + 1) for j in range(i + 1, dim + 1)])
+    n_edges = len(np.unique(np.sort(pairs, axis=1), axis=0))
+    n, med, p90 = stats(fine)
+    rest = edge[~fine]
+    return {"elements": len(cells), "dofs": dim * (len(points) + n_edges),
+            "fine_zone_elements": n, "fine_zone_median_edge_mm": med, "fine_zone_p90_edge_mm": p90,
+            "elsewhere_median_edge_mm": float(np.median(rest)) if len(rest) else None,
+            "elsewhere_max_edge_mm": float(rest.max()) if len(rest) else None,
+            "per_layer": {str(L): dict(zip(("elements", "median_edge_mm", "p90_edge_mm"), stats(layer == L)))
+                          for L in np.unique(layer).tolist()}}
 
 
 # ---------------------------------------------------------------------- cache and output
@@ -356,6 +411,7 @@ def build_mesh(model: LayeredModel, sizing: Sizing, force: bool = False, progres
     progress: optional `fingertip.progress` object (None: silent)."""
     progress = as_progress(progress)
     sizing.check()
+    model = surface_model(model, sizing)
     key = mesh_key(model, sizing)
     path = cache_dir() / f"{key}.npz"
     t0 = time.perf_counter()
@@ -431,9 +487,10 @@ def summary(rep: dict, info: dict, out_dir) -> str:
               f"min scaled Jacobian {q['min_scaled_jacobian']:.3f} (mean {q['mean_scaled_jacobian']:.2f})",
               f"  straddling tets: {s['straddling_tets']} (deepest crossing {s['max_crossing_mm']:.3f} mm, "
               f"tolerance {s['tol_mm']:.3f} mm)",
-              f"  median edge: volar fine zone {a['fine_zone_median_edge_mm']:.3f} mm, elsewhere "
-              f"{a['elsewhere_median_edge_mm']:.3f} mm; per layer "
-              + " ".join(f"{e:.2f}" for e in a["median_edge_per_layer_mm"]) + " mm",
+              f"  {a['dofs']} DOFs (P2), {a['rays_per_section']} rays per section; median edge (90th pct): "
+              f"volar fine zone {a['fine_zone_median_edge_mm']:.3f} ({a['fine_zone_p90_edge_mm']:.3f}) mm, "
+              f"elsewhere {a['elsewhere_median_edge_mm']:.3f} mm; per layer "
+              + " ".join(f"{v['median_edge_mm']:.2f}" for v in a["per_layer"].values()) + " mm",
               f"  bone offset towards the nail: {rep['bone_offset_mm']:.3f} mm",
               "  regions: " + ", ".join(f"{k} {v['facets']} facets" for k, v in rep["regions"].items())]
     return "\n".join(lines)
@@ -444,6 +501,7 @@ def run_mesh(out_dir, model: LayeredModel, sizing: Sizing, force: bool = False, 
     None when out_dir already holds the outputs of these inputs (and not force). progress:
     optional `fingertip.progress` object, or True for one on stderr (None: silent)."""
     sizing.check()
+    model = surface_model(model, sizing)
     if not force and outputs_current(out_dir, inputs_key(model, sizing)):
         return None
     progress = as_progress(progress)

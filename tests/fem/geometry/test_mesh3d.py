@@ -10,10 +10,12 @@ import pytest
 import pipeline
 from fem.geometry.layered import model_from_args, params_for
 from fem.geometry.mesh3d import (
+    Sizing,
     boundary_faces,
     label_tets,
     quality,
     straddle_check,
+    surface_model,
     tet_volumes,
 )
 from fingertip.errors import InputError
@@ -65,7 +67,7 @@ def test_layer_volumes_within_2_percent_of_the_model_shells(built):
 
 def test_no_tet_straddles_an_interface(built):
     m, info = load(built[0])
-    model = model_from_args(None, "monkey", params_for("monkey"))
+    model = surface_model(model_from_args(None, "monkey", params_for("monkey")), Sizing(size_mm=info["sizing"]["size_mm"]))
     tets, layer = m.cells_dict["tetra"], m.cell_data["layer"][0]
     assert np.array_equal(label_tets(model, m.points, tets), layer)
     # On the end cuts every shell's cap lies in one plane: the envelope (0.02 mm) keeps the mesh on
