@@ -129,7 +129,6 @@ def test_3d_sizes_one_and_seven_tenths_give_distinct_meshes_refining_every_layer
 
 
 # ------------------------------------------------------------------ region ends and reports
-# ------------------------------------------------------------------ region ends and reports
 @pytest.mark.parametrize("which", ["section", "cylinder8"])
 def test_fixed_region_ends_are_mesh_vertices(monkey, which):
     """The fixed span's ends are sampled on the boundary, so the held arc is the span at any size
