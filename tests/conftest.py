@@ -10,7 +10,7 @@ import shutil
 import pytest
 
 import pipeline
-from fem.thesis.findings import MeshLevel, Workshop
+from fem.thesis.findings import LEVELS, MeshLevel, Workshop
 
 TEST_LEVEL = MeshLevel("tests: 0.25 mm 2D, 1 mm 3D", 0.25, 1.0)
 """The meshes the thesis-claim tests pin their numbers on: the coarsest 2D level and the 1 mm 3D presets."""
@@ -32,6 +32,13 @@ def _copy(source, tmp_path_factory):
     folder = tmp_path_factory.mktemp(f"{source.name}_copy") / source.name
     shutil.copytree(source, folder)
     return folder
+
+
+@pytest.fixture(scope="session")
+def fine_shop(tmp_path_factory):
+    """A Workshop on the next mesh level (0.125 mm 2D) for the claims the test level cannot resolve
+    (two bars 0.25 mm apart on 0.25 mm elements)."""
+    return Workshop(tmp_path_factory.mktemp("thesis_models_fine"), quick=False, level=LEVELS[1])
 
 
 @pytest.fixture(scope="session")

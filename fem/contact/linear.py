@@ -506,7 +506,11 @@ class ContactModel:
         depth = np.full(n, min(self._force_depth, max_depth_mm))
         lo, hi = np.zeros(n), np.full(n, np.inf)
         warm = self._warm
+        tried = []
         for it in range(1, 101):
+            if n > 1 and any(np.allclose(depth, d, rtol=1e-9, atol=1e-12) for d in tried[-2:]):
+                return self._equal_travel(indentor, n * target, max_depth_mm, t0)
+            tried.append(depth.copy())
             try:
                 res, lcp, sub = self.solve_travel(indentor, travels(depth), warm)
             except BlockedError as exc:         # too deep: held nodes reached; bisect below
@@ -535,6 +539,16 @@ class ContactModel:
                 new = 0.5 * (lo + np.minimum(hi, 2 * depth))
             depth = np.minimum(np.clip(new, 0.5 * depth, 2 * depth), max_depth_mm)
         raise RuntimeError(f"force control did not converge for {indentor.name}")
+
+    def _equal_travel(self, indentor, total, max_depth_mm, t0):
+        """Equal force that the mesh cannot resolve: Newton cycles between two states when a node
+        lies as near one part as the other (two tips closer than the elements under them, the node
+        passing from part to part as their depths differ). The tips then travel together, carrying
+        `total` between them; kkt["equal_force"] says so and gives the parts' forces."""
+        res = self._force(indentor, total, False, max_depth_mm, t0)
+        res.kkt["equal_force"] = (f"not resolved by the mesh (the parts share nodes): equal travel, parts carry "
+                                  + ", ".join(f"{f:.4g}" for f in res.part_force_N))
+        return res
 
     def _not_reached(self, target, max_depth_mm, force) -> InputError:
         unit = "N/mm" if self.points_mm.shape[1] == 2 else "N"

@@ -240,11 +240,12 @@ def target_size(domain: Domain2D, sizing: Sizing2D, q: np.ndarray) -> np.ndarray
 
 
 def _resample(poly: np.ndarray, step: float) -> np.ndarray:
-    """Closed polygon resampled at about `step` mm arc length."""
+    """Closed polygon resampled at about `step` mm arc length, its vertices kept (so that the
+    polyline through the samples is the polygon)."""
     seg = np.linalg.norm(np.roll(poly, -1, axis=0) - poly, axis=1)
     s = np.concatenate([[0], np.cumsum(seg)])
     n = max(int(np.ceil(s[-1] / step)), 8)
-    t = np.linspace(0, s[-1], n, endpoint=False)
+    t = np.union1d(np.linspace(0, s[-1], n, endpoint=False), s[:-1])
     closed = np.vstack([poly, poly[:1]])
     return np.column_stack([np.interp(t, s, closed[:, 0]), np.interp(t, s, closed[:, 1])])
 
@@ -266,9 +267,10 @@ def _sample_curve(poly: np.ndarray, h_at, cap: float, breaks=()) -> np.ndarray:
     starts = u[at] if len(at) else np.zeros(1)
     ends = np.append(starts[1:], starts[0] + u[-1])
     counts = np.maximum(1, np.round(stretch * (ends - starts))).astype(int)
-    targets = np.concatenate([a + (b - a) * np.arange(n) / n for a, b, n in zip(starts, ends, counts)]) % u[-1]
-    idx = np.searchsorted(u, targets - 1e-12).clip(0, len(dense) - 1)
-    return dense[np.unique(idx)]                            # in order along the curve
+    targets = np.unique(np.concatenate([a + (b - a) * np.arange(n) / n
+                                        for a, b, n in zip(starts, ends, counts)]) % u[-1])
+    closed = np.vstack([dense, dense[:1]])                  # positions at the targets' arc lengths, in order
+    return np.column_stack([np.interp(targets, u, closed[:, 0]), np.interp(targets, u, closed[:, 1])])
 
 
 def _corners(poly: np.ndarray) -> np.ndarray:

@@ -14,11 +14,11 @@ from tests.helpers import by_key
 
 def test_block_against_flamant(shop):
     """Thesis 4.1, radial stress against Flamant on the 40 x 18 mm block with held sides, 0-75 deg from
-    the load axis: measured worst 3.6 % at r = 1 mm and 14.9 % at r = 3 mm (both at 75 deg, near the
+    the load axis: measured worst 4.9 % at r = 1 mm and 14.7 % at r = 3 mm (both at 75 deg, near the
     surface: the finite block), 0.25 mm mesh; the thesis's 'matched' read as within 5 % differs."""
     (f,) = chapter4_mechanics.flamant_block(shop)
     assert f.verdict == DIFFERS
-    assert f.checks[0].value == pytest.approx(3.6, abs=1.0) and f.checks[1].value == pytest.approx(14.9, abs=1.5)
+    assert f.checks[0].value == pytest.approx(4.9, abs=1.0) and f.checks[1].value == pytest.approx(14.9, abs=1.5)
     rows = {(r["block"], r["r_mm"], r["angle_deg"]): r["fe_over_flamant"] for r in f.table}
     assert abs(rows[("40 x 18 mm, sides free", 3.0, 60)] - 1) > 0.12          # the free-sides block is not
     assert abs(rows[("40 x 18 mm, sides held", 1.0, 0)] - 1) < 0.02            # on the load axis: 0.1 %
@@ -47,7 +47,8 @@ def test_cylinders_follow_plane_strain_hertz_not_a_square_root_law(shop):
     assert findings["fig4-24_solid_fluid_relative"].verdict == REPRODUCED          # 0.56 of the solid's spread
     assert findings["fig4-24_solid_fluid_absolute"].verdict == DIFFERS             # 6.9 times it in mm
     contact = findings["fig4-25_contact_relative"]
-    assert contact.checks[0].value == 0.0 and contact.checks[0].outcome == DIFFERS  # equal widths at 0.25 mm
+    # one contact node spacing (0.25 mm) wider at the smallest difference: the widths on 0.25 mm elements
+    assert contact.checks[0].value == pytest.approx(0.25, abs=0.01) and contact.checks[0].outcome == REPRODUCED
     assert [c.outcome for c in contact.checks[1:]] == [REPRODUCED] * 3
 
 

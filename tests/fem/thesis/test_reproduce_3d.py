@@ -2,6 +2,7 @@
 3D (figures 6-25, 7-4), the 2D section against 3D (figures 7-2, 7-3) and step 5 across the pad
 (figure 6-39). The cylinder series and layer study behind the other 3D claims are pinned on 2D
 models in tests/fem/biomech/test_biomech.py; dorsal ratios in tests/fem/thesis/test_dorsal_trend.py."""
+import numpy as np
 import pytest
 
 from fem.thesis import chapters5_7 as thesis3d
@@ -30,13 +31,13 @@ def test_2d_section_against_3d(shop):
     """Measured (1 mm elements, the reproducible mesh): 3D / 2D peak max compressive strain 1.26 with
     profiles correlated 0.997; 2D / 3D peak SED 0.78 against the thesis's > 1 (the plane-strain
     factor 1 / (1 - nu^2) = 1.30 times the load ratio 0.96 within 1 %). The section 2 mm off is
-    *more* strained here (SED 1.14x, strain 1.04x)."""
+    *more* strained here (SED 1.06x)."""
     f = by_key(thesis3d.sections_2d_3d(shop))
     eps, sed, off = f["fig7-2_eps1"], f["fig7-2_sed"], f["fig7-3_off_centre"]
     assert eps.checks[0].value > 0.99 and eps.checks[1].value == pytest.approx(1.25, abs=0.06)
     assert eps.verdict == DIFFERS and "1 / 1.30 at nu = 0.48" in eps.notes
     assert sed.verdict == DIFFERS and 0.7 < sed.checks[0].value < 0.9
-    assert off.verdict == DIFFERS and off.checks[0].value == pytest.approx(1.14, abs=0.03)
+    assert off.verdict == DIFFERS and off.checks[0].value == pytest.approx(1.06, abs=0.03)
 
 
 def test_step_across_the_pad(shop):
@@ -62,17 +63,18 @@ def test_step_across_the_pad(shop):
 
 def test_layer2_sense_turns_with_the_skin_thickness(shop):
     """Fig. 6-10 on the monkey section (0.25 mm elements). Measured: stiffening layer 2 changes the
-    deflection 0.5 mm from a 2 mm wedge by -0.39 mm (sign change 1.55 mm); the thesis's prescribed
-    nodal line gives -0.47 mm linear and -0.46 mm neo-Hookean; a 0.25 + 0.25 mm skin gives
-    +0.26 mm (more deflection from 0.17 to 2.58 mm), the thesis's sense."""
+    deflection 0.5 mm from a 2 mm wedge by -0.44 mm (sign change 1.55 mm); the thesis's prescribed
+    nodal line gives -0.59 mm linear (sign change 1.92 mm), and neo-Hookean its Newton stalls at
+    0.74 mm of the 2 mm (J 0.43 beside the pushed node: a node pushed into 0.25 mm elements); a
+    0.25 + 0.25 mm skin gives +0.21 mm (more deflection from 0.23 to 2.51 mm), the thesis's sense."""
     from fem.biomech.deflection import DeflectionExperiment
 
     section = shop.folder("monkey_section", thesis3d.monkey_section(5.0))
     exp = DeflectionExperiment(section)
     near, flips = thesis3d.layer2_change(*(exp.profiles(c, (2.0,))[0].at for c in thesis3d.LAYER2_CODES))
-    assert near == pytest.approx(-0.39, abs=0.05) and flips == [pytest.approx(1.55, abs=0.15)]
+    assert near == pytest.approx(-0.44, abs=0.05) and flips == [pytest.approx(1.55, abs=0.15)]
     reasons = thesis3d.layer2_reasons(shop)
-    assert reasons["2D section, nodal line"][0] == pytest.approx(-0.47, abs=0.05)
-    assert reasons["2D section, nodal line, neo-Hookean"][0] == pytest.approx(-0.46, abs=0.05)
+    assert reasons["2D section, nodal line"][0] == pytest.approx(-0.59, abs=0.05)
+    assert np.isnan(reasons["2D section, nodal line, neo-Hookean"][0])        # reported as not reaching 2 mm
     thin_near, thin_flips = reasons[thesis3d.THIN_LABEL]
-    assert thin_near == pytest.approx(0.26, abs=0.05) and thin_flips[-1] == pytest.approx(2.58, abs=0.2)
+    assert thin_near == pytest.approx(0.21, abs=0.05) and thin_flips[-1] == pytest.approx(2.51, abs=0.2)

@@ -41,21 +41,21 @@ def test_point_load_profiles_and_receptive_fields(shop):
 
 
 def test_two_point_cues(shop):
-    """Thesis 4.3. Equal displacement: 1.16 of one load's peak SED at 0.2 mm, down to 0.68 at
-    1.2 mm, up again; equal force falls (a 1.9 % rise on the way here, 0.26 % on 0.125 mm, 0.11 % on
-    0.0625 mm: within mesh uncertainty). Read as the distance between the loads, the equal-force
-    cue settles (5 % of its 3 mm value) at 2.2 mm here, 1.6 mm on the 0.125 mm models: one tip alone
-    jitters by 7.4 % between neighbouring places on 0.25 mm elements. Read as the half separation
-    (3.2 mm apart) it settles only at 3.8 mm: the tips run down the cylinder's flanks."""
+    """Thesis 4.3. Equal displacement: 1.34 of one load's peak SED at 0.2 mm, then down and up
+    again; equal force falls (a 2.2 % rise on the way here; 0.2 mm apart the tips share the apex
+    node of 0.25 mm elements, so equal force is equal travel there, fem.contact.linear). Read as the
+    distance between the loads, the equal-force cue settles (5 % of its 3 mm value) at 2.2 mm here,
+    1.4 mm on the 0.125 mm models: one tip alone jitters between neighbouring places on 0.25 mm
+    elements. Read as the half separation it does not settle before 4 mm here."""
     shapes, by_distance, by_half = chapter4_receptors.two_point_resolution(shop)
-    assert shapes.checks[0].value == pytest.approx(1.16, abs=0.05)
+    assert shapes.checks[0].value == pytest.approx(1.34, abs=0.05)
     assert [c.outcome for c in shapes.checks[:3]] == [REPRODUCED] * 3
     rows = shapes.table
     assert rows[0]["equal_force_MPa"] == pytest.approx(rows[0]["equal_displacement_MPa"], rel=1e-6)
     assert by_distance.reading != by_half.reading and by_distance.thesis == by_half.thesis
     settle = by_distance.checks[0]
     assert settle.limit == 1.6 and 1.6 < settle.value <= 2.4 and by_distance.verdict == DIFFERS
-    assert by_half.checks[0].limit == 3.2 and by_half.checks[0].value == pytest.approx(3.8)
+    assert by_half.checks[0].limit == 3.2 and np.isnan(by_half.checks[0].value) and by_half.verdict == DIFFERS
     alone = np.array([r["one_tip_alone_force_MPa"] for r in rows[1:]])
     assert np.max(np.abs(np.diff(alone)) / alone[:-1]) > 0.05             # the jitter beyond the band
     disp = np.array([r["equal_displacement_MPa"] for r in rows])
@@ -67,7 +67,7 @@ def test_bar_on_the_four_models(shop):
     """Thesis 4.4. Edge over centre pressure 1.87, 1.78, 1.43, 1.44 (square, block, cylinder,
     cylinder with bone; 0.125 mm: 2.47-1.95). SED contrast 0.080 (square) against 0.186 (block,
     0.169 with free sides): the square is not the best, differs. |shear strain| contrast 0.96-1.0
-    against at most 0.19. The bone: peak SED x 2.14, force x 1.34."""
+    against at most 0.19. The bone: peak SED x 2.12, force x 1.32, SED contrast x 0.50."""
     f = by_key(chapter4_receptors.rectangular_bars(shop))
     edge = f["fig4-7_edge_pressure"]
     assert edge.verdict == REPRODUCED and 1.3 < edge.checks[0].value < 2.0
@@ -83,17 +83,17 @@ def test_bar_on_the_four_models(shop):
     assert shear.checks[1].value == pytest.approx(1.13, abs=0.1)                # its peak is not the sharpest
     level, contrast = f["fig4-7_bone_level"], f["fig4-7_bone_contrast"]
     assert level.verdict == REPRODUCED and level.checks[3].value == pytest.approx(2.15, abs=0.1)
-    assert contrast.verdict == DIFFERS and contrast.checks[3].value == pytest.approx(0.34, abs=0.05)
+    assert contrast.verdict == DIFFERS and contrast.checks[3].value == pytest.approx(0.50, abs=0.05)
     cyl, held = rows["cylinder"], rows["cylinder with bone (held)"]
-    assert held["force_N_per_mm"] / cyl["force_N_per_mm"] == pytest.approx(1.34, abs=0.03)
+    assert held["force_N_per_mm"] / cyl["force_N_per_mm"] == pytest.approx(1.32, abs=0.03)
 
 
 def test_gratings_on_cylinders_and_block(shop):
     """Thesis 4.5.2-4.5.4 with the 0.5 mm-bar grating. Bars touching: 1-4 on the 8 mm cylinder,
-    1-5 on the 16 mm one, all 8 on the block. SED under each bar over the rightmost's (8 mm): 0.737,
-    0.528, 0.635, 0.814, 0.954, 0.999, 1.000, 1.000. Two rightmost bars on the 16 mm model 1.1 %
-    apart (differs: the 5 mm last gap). Off-centre profiles 0.152, 0.342 (8 mm), 0.049, 0.054
-    (block). Central profiles cylinder against block 0.267, population responses 0.188 (differs)."""
+    1-5 on the 16 mm one, all 8 on the block. SED under each bar over the rightmost's (8 mm): 0.743,
+    0.541, 0.657, 0.824, 0.966, 1.001, 1.000, 1.000. Two rightmost bars on the 16 mm model 1.8 %
+    apart (differs: the 5 mm last gap). Off-centre profiles 0.191, 0.377 (8 mm), 0.0067, 0.0127
+    (block: nearly a half-space's 0). Central profiles cylinder against block 0.267, population responses 0.188 (differs)."""
     runs = chapter4_gratings.grating_runs(shop)
     f = by_key(chapter4_gratings.grating_findings(runs))
     l8, l16, block = (label for _, label, _ in chapter4_gratings.GRATING_MODELS)
@@ -111,9 +111,9 @@ def test_gratings_on_cylinders_and_block(shop):
     assert f["sec4-5-3_rightmost_bars"].verdict == DIFFERS and f["sec4-5-3_rightmost_bars"].checks[0].value < 3.0
 
     off = f["fig4-18_off_centre"]
-    assert off.verdict == REPRODUCED and off.checks[1].value == pytest.approx(6.4, abs=1.0)
+    assert off.verdict == REPRODUCED and off.checks[1].value == pytest.approx(30, abs=3)
     rms = {(r["model"], r["receptor_off_centre_mm"]): r["rms_difference"] for r in off.table}
-    assert rms[block, 2.0] < 0.1 < rms[l8, 1.0]                              # 0.054 against 0.152
+    assert rms[block, 2.0] < 0.1 < rms[l8, 1.0]                              # 0.013 against 0.191
 
     central = f["sec4-5-4_central_profiles"]
     assert central.verdict == DIFFERS and central.checks[0].value == pytest.approx(1.42, abs=0.1)
@@ -121,12 +121,13 @@ def test_gratings_on_cylinders_and_block(shop):
     assert share[-1] > share[1:-1].max()                                      # the end bars carry the most
 
 
-def test_gap_peaks(shop):
-    """Thesis 4.5.5, two 2 mm bars. Inter-peak distance 0.63, 0.81, 0.92, 1.07, 1.60, 2.09, 3.18 mm
-    for gaps 0.25-3 mm (0.125 mm: 0.71, 0.79, 0.90, 1.06, 1.49, 1.94, 3.07): within 6.6 % of the
-    gap from 1 mm up, levelling off near the receptor depth below."""
-    (f,) = chapter4_gratings.gap_detection(shop)
-    assert f.verdict == REPRODUCED and f.checks[0].value == pytest.approx(6.6, abs=1.0)
+def test_gap_peaks(fine_shop):
+    """Thesis 4.5.5, two 2 mm bars, on 0.125 mm elements (on 0.25 mm ones a 0.25 mm gap is one
+    element: its peaks 0.40 mm apart, differs). Inter-peak distance 0.67, 0.79, 0.84, 1.04, 1.56,
+    2.07, 3.09 mm for gaps 0.25-3 mm: within 3.8 % of the gap from 1 mm up, levelling off near the
+    receptor depth below."""
+    (f,) = chapter4_gratings.gap_detection(fine_shop)
+    assert f.verdict == REPRODUCED and f.checks[0].value == pytest.approx(3.8, abs=1.0)
     dist = {r["gap_mm"]: r["interpeak_mm"] for r in f.table}
-    assert dist[0.5] - dist[0.25] < 0.25                                   # 0.18 mm for 0.25 mm more gap
+    assert dist[0.5] - dist[0.25] < 0.25                                   # 0.12 mm for 0.25 mm more gap
     assert dist[3.0] - dist[1.0] == pytest.approx(2.0, abs=0.2)            # slope 1 above it
