@@ -546,7 +546,7 @@ class ContactModel:
         passing from part to part as their depths differ). The tips then travel together, carrying
         `total` between them; kkt["equal_force"] says so and gives the parts' forces."""
         res = self._force(indentor, total, False, max_depth_mm, t0)
-        res.kkt["equal_force"] = (f"not resolved by the mesh (the parts share nodes): equal travel, parts carry "
+        res.kkt["equal_force"] = ("not resolved by the mesh (the parts share nodes): equal travel, parts carry "
                                   + ", ".join(f"{f:.4g}" for f in res.part_force_N))
         return res
 

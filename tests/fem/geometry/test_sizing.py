@@ -1,6 +1,7 @@
 """Sizes that converge: smooth section outlines (the model resampled on rays for the mesh size),
 `--size` refining every layer in proportion (2D and 3D), distinct 3D meshes at 1.0 and 0.7 mm,
-region ends at mesh vertices, and the achieved sizes model.json reports. 2D meshes, and the 3D monkey at 1.0 and 0.7 mm once per module (through the mesh cache, as `mesh` runs)."""
+region ends at mesh vertices, and the achieved sizes model.json reports. 2D meshes, and the 3D
+monkey at 1.0 and 0.7 mm once per module (through the mesh cache, as `mesh` runs)."""
 import json
 
 import numpy as np
