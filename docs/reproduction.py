@@ -62,7 +62,8 @@ def table(data: dict) -> str:
              "| thesis | claim | verdict | checks: value +- mesh uncertainty (band) |", "|---|---|---|---|"]
     for f in findings:
         claim = f.title + (f"; read: {f.reading}" if f.reading else "")
-        lines.append(f"| {f.section} | {claim} | {f.verdict} | " + "; ".join(_check(c) for c in f.checks) + " |")
+        cells = [f.section, claim, f.verdict, "; ".join(_check(c) for c in f.checks)]
+        lines.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")     # a | in a cell ends it
     return "\n".join(lines + ["", END])
 
 

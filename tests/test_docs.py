@@ -99,3 +99,24 @@ def test_documented_2d_commands_run(tmp_path, monkeypatch):
     for argv in runs:
         assert pipeline.main([*argv, "--quiet"]) == 0, argv
     assert (tmp_path / "out" / "cyl8" / "model.json").is_file()
+
+
+def _reproduction_module():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("docs_reproduction", DOCS / "reproduction.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_reproduction_table_is_the_full_runs():
+    """docs/reproduction.md's table is what docs/reproduction.py renders from the stored full run."""
+    import json
+
+    rep = _reproduction_module()
+    data = json.loads(rep.DATA.read_text())
+    assert not data["manifest"]["quick"]
+    text = rep.DOC.read_text()
+    assert rep.with_table(text, data) == text, "regenerate it: python docs/reproduction.py"
+
