@@ -167,7 +167,7 @@ def sensitivity_table(model: str, rows: list) -> list[str]:
     return out
 
 
-def variants(model: str) -> list:
+def variants() -> list:
     """(label, material, nu) of the sensitivity study: the default, each nu, each bone modulus."""
     return ([("default", None, None)] + [(f"nu {nu:g}", None, nu) for nu in NU]
             + [(f"bone {k}", "m4333" + d, None) for k, d in BONE_DIGITS.items() if d != "8"])
@@ -197,7 +197,7 @@ def main(argv=None):
         if args.sensitivity:
             for model in MODELS:
                 size = SENSITIVITY_SIZE_MM[model]
-                rows = in_child(model, size, Path(tmp), variants(model))
+                rows = in_child(model, size, Path(tmp), variants())
                 lines += [f"## Sensitivity: {MODELS[model]}, size {size:g} mm", ""] + sensitivity_table(model, rows) + [""]
                 print("\n".join(lines[-len(rows) - 3:]), flush=True)
     args.out.parent.mkdir(exist_ok=True)
