@@ -62,6 +62,6 @@ def test_wheel_installed_outside_the_repository_runs_the_main_job_and_a_shipped_
 
     assert "written to" in run("reconstruct", "--out", "o", "--quiet") or (work / "o" / "sections.json").is_file()
     assert (work / "o" / "sections.json").is_file() and (work / "o" / "report.png").is_file()
-    run("mesh", "--preset", "monkey", "--size", "1.0", "--out", "m", "--quiet")
+    run("mesh", "--preset", "monkey", "--size", "1.5", "--out", "m", "--quiet")
     run("indent", "m", "--scene", "ramp_hold", "--out", "spikes", "--quiet")
     assert (work / "spikes" / "ramp_hold" / "spikes.csv").is_file()

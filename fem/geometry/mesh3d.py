@@ -488,12 +488,18 @@ def summary(rep: dict, info: dict, out_dir) -> str:
               f"  straddling tets: {s['straddling_tets']} (deepest crossing {s['max_crossing_mm']:.3f} mm, "
               f"tolerance {s['tol_mm']:.3f} mm)",
               f"  {a['dofs']} DOFs (P2), {a['rays_per_section']} rays per section; median edge (90th pct): "
-              f"volar fine zone {a['fine_zone_median_edge_mm']:.3f} ({a['fine_zone_p90_edge_mm']:.3f}) mm, "
-              f"elsewhere {a['elsewhere_median_edge_mm']:.3f} mm; per layer "
-              + " ".join(f"{v['median_edge_mm']:.2f}" for v in a["per_layer"].values()) + " mm",
+              f"volar fine zone {_mm(a['fine_zone_median_edge_mm'])} ({_mm(a['fine_zone_p90_edge_mm'])}) mm, "
+              f"elsewhere {_mm(a['elsewhere_median_edge_mm'])} mm; per layer "
+              + " ".join(_mm(v["median_edge_mm"], 2) for v in a["per_layer"].values()) + " mm",
               f"  bone offset towards the nail: {rep['bone_offset_mm']:.3f} mm",
               "  regions: " + ", ".join(f"{k} {v['facets']} facets" for k, v in rep["regions"].items())]
     return "\n".join(lines)
+
+
+def _mm(v: float | None, digits: int = 3) -> str:
+    """A length for the summary; 'none' where no element was measured (a zone the mesh has no
+    element centroid in, as the volar fine zone of a mesh coarser than it is deep)."""
+    return "none" if v is None else f"{v:.{digits}f}"
 
 
 def run_mesh(out_dir, model: LayeredModel, sizing: Sizing, force: bool = False, progress=None):

@@ -165,3 +165,25 @@ def test_2d_line_load_reaches_2_mm_and_parts_from_linear(section):
     assert np.all(np.diff(c.max_difference) > 0) and c.max_difference[-1] > 0.05
     assert c.min_J[-1] > 0.3
     np.testing.assert_allclose(c.deflection_linear_mm[:, np.argmin(np.abs(c.distance_mm))], c.depths_mm, rtol=1e-9)
+
+
+def test_a_stagnating_newton_is_cut_after_the_stagnation_count(monkeypatch):
+    """A tangent 1000x too stiff makes each Newton step remove under 1 % of the residual: the step is
+    given up after STAGNATION iterations without the residual halving (not max_iter), and with no
+    cuts left the solve stops with that reason."""
+    import fem.core.neohookean as nh
+
+    model = _block(2)
+    nl = NeoHookean(model)
+    exact = nl.tangent
+    calls = []
+
+    def stiff(u):
+        calls.append(1)
+        f, K, G = exact(u)
+        return f, 1000 * K, G
+
+    monkeypatch.setattr(nl, "tangent", stiff)
+    res = nl.solve({"ymin": 0.0, "ymax": (0.0, -0.05)}, steps=1, max_cuts=0, partial=True)
+    assert "Newton stagnated" in res.stopped and len(res.t) == 1
+    assert len(calls) == nh.STAGNATION + 2            # predictor, the first norm, then STAGNATION more

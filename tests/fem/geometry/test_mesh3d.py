@@ -1,6 +1,6 @@
 """3D mesh of the monkey preset through `pipeline.py mesh`: the mesh.vtu / model.json contract and
-the mesher's checks. One coarse mesh (0.8 mm) is built once per module; pytetwild is not
-deterministic, so tet counts are never asserted."""
+the mesher's checks. One coarse mesh (0.7 mm, shared with tests/fem/geometry/test_sizing.py through
+the mesh cache) is built once per module."""
 import json
 
 import meshio
@@ -12,6 +12,7 @@ from fem.geometry.layered import model_from_args, params_for
 from fem.geometry.mesh3d import (
     Sizing,
     boundary_faces,
+    cache_dir,
     label_tets,
     quality,
     straddle_check,
@@ -21,18 +22,15 @@ from fem.geometry.mesh3d import (
 from fingertip.errors import InputError
 from tests.helpers import write_sections
 
-ARGS = ["mesh", "--preset", "monkey", "--size", "0.8", "--quiet"]
+ARGS = ["mesh", "--preset", "monkey", "--size", "0.7", "--quiet"]
 
 
 @pytest.fixture(scope="module")
 def built(tmp_path_factory):
-    mp = pytest.MonkeyPatch()
-    cache = tmp_path_factory.mktemp("cache")
-    mp.setenv("FINGERTIP_CACHE_DIR", str(cache))
+    """(model folder, its mesh cache entry)."""
     out = tmp_path_factory.mktemp("monkey")
     assert pipeline.main([*ARGS, "--out", str(out)]) == 0
-    yield out, cache
-    mp.undo()
+    return out, cache_dir() / f"{load(out)[1]['mesh']['cache_key']}.npz"
 
 
 def load(out):
@@ -52,7 +50,7 @@ def test_file_contract(built):
     p = info["params"]
     assert p["epidermis_mm"] == 0.5 and p["dermis_mm"] == 1.0 and p["bone_offset_mm"] == 0.15
     assert info["regions"]["support"]["normal"] == [0.0, 1.0, 0.0]
-    assert info["sizing"]["size_mm"] == 0.8 and len(info["sections_sha256"]) == 64
+    assert info["sizing"]["size_mm"] == 0.7 and len(info["sections_sha256"]) == 64
 
 
 def test_layer_volumes_within_2_percent_of_the_model_shells(built):
@@ -116,12 +114,12 @@ def test_quality_and_sizing_are_reported_and_sane(built):
     assert q == pytest.approx(info["mesh"]["quality"])
     assert q["min_dihedral_deg"] > 5 and q["min_scaled_jacobian"] > 0.05
     fine = info["mesh"]["sizing_achieved"]["fine_zone_median_edge_mm"]
-    assert fine == pytest.approx(0.8, rel=0.25)
+    assert fine == pytest.approx(0.7, rel=0.25)
 
 
 def test_cache_returns_the_same_mesh_and_keys_change_with_inputs(built, tmp_path):
-    out, cache = built
-    assert len(list(cache.rglob("*.npz"))) == 1
+    out, entry = built
+    assert entry.is_file()
     again = tmp_path / "again"
     assert pipeline.main([*ARGS, "--out", str(again)]) == 0
     m1, _ = load(out)
@@ -133,8 +131,8 @@ def test_cache_returns_the_same_mesh_and_keys_change_with_inputs(built, tmp_path
 
     base = model_from_args(None, "monkey", params_for("monkey"))
     other = model_from_args(None, "monkey", params_for("monkey", bone_offset_mm=0.1))
-    assert mesh_key(base, Sizing(size_mm=0.8)) != mesh_key(other, Sizing(size_mm=0.8))
-    assert mesh_key(base, Sizing(size_mm=0.8)) != mesh_key(base, Sizing(size_mm=0.7))
+    assert mesh_key(base, Sizing(size_mm=0.7)) != mesh_key(other, Sizing(size_mm=0.7))
+    assert mesh_key(base, Sizing(size_mm=0.7)) != mesh_key(base, Sizing(size_mm=0.8))
 
 
 def test_sizing_field_is_fine_under_the_pad_and_grows_inwards_and_dorsally():
@@ -157,8 +155,7 @@ def test_sizing_field_is_fine_under_the_pad_and_grows_inwards_and_dorsally():
 def test_force_rebuilds_while_a_normal_run_uses_the_cache(built, monkeypatch):
     import fem.geometry.mesh3d as fm
 
-    _, cache = built
-    with np.load(next(cache.rglob("*.npz"))) as d:
+    with np.load(built[1]) as d:
         points, tets = d["points"], d["tets"]
     calls = []
 
@@ -168,10 +165,10 @@ def test_force_rebuilds_while_a_normal_run_uses_the_cache(built, monkeypatch):
 
     monkeypatch.setattr(fm, "tetrahedralize", mesher)
     model = model_from_args(None, "monkey", params_for("monkey"))
-    _, info = fm.build_mesh(model, fm.Sizing(size_mm=0.8))
+    _, info = fm.build_mesh(model, fm.Sizing(size_mm=0.7))
     assert info["cached"] and calls == []
-    _, info = fm.build_mesh(model, fm.Sizing(size_mm=0.8), force=True)
-    assert not info["cached"] and calls == [0.8]
+    _, info = fm.build_mesh(model, fm.Sizing(size_mm=0.7), force=True)
+    assert not info["cached"] and calls == [0.7]
 
 
 def test_rerun_skips_current_outputs_and_region_changes_reuse_the_tets(built, tmp_path):
@@ -187,16 +184,15 @@ def test_rerun_skips_current_outputs_and_region_changes_reuse_the_tets(built, tm
     assert 0 < m2.point_data["nail"].sum() < m1.point_data["nail"].sum()
 
 
-def test_monkey_size_sections_json_meshes_with_size_defaults(built, tmp_path, monkeypatch, capsys):
+def test_monkey_size_sections_json_meshes_with_size_defaults(built, tmp_path, capsys):
     """A monkey-size replica needs no --layer3/--bone-offset: the defaults follow the section size,
     are printed and recorded in model.json; an explicit flag still wins."""
     from fem.geometry.sections import preset_sections
 
     z, polys, _ = preset_sections("monkey")
     src = write_sections(tmp_path / "replica", polys, z)
-    monkeypatch.setenv("FINGERTIP_CACHE_DIR", str(built[1]))
     out = tmp_path / "m"
-    assert pipeline.main(["mesh", str(src), "--size", "0.8", "--out", str(out)]) == 0
+    assert pipeline.main(["mesh", str(src), "--size", "0.7", "--out", str(out)]) == 0
     assert "layer3_mm 0.55, bone_offset_mm 0.15" in capsys.readouterr().out
     _, info = load(out)
     assert info["params"]["layer3_mm"] == 0.55 and info["params"]["bone_offset_mm"] == 0.15
@@ -249,3 +245,15 @@ def test_top_on_a_flat_cut_rim_is_warned_about(built, tmp_path, capsys):
     assert pipeline.main(["indent", str(built[0]), "--indentor", "cone", "--position", "top", "--incline", "-30",
                           "--depth", "0.25", "--out", str(out), "--quiet"]) == 0
     assert "top point is on the rim of the distal cut" in capsys.readouterr().err
+
+
+def test_summary_of_a_mesh_with_an_empty_zone(built):
+    """A mesh coarser than the fine zone is deep (the human preset at --size 3: every element
+    centroid inside it) has no element elsewhere: the summary says 'none' where it failed with a
+    TypeError after writing the folder."""
+    from fem.geometry.mesh3d import summary
+
+    rep = load(built[0])[1]["mesh"]
+    achieved = {**rep["sizing_achieved"], "elsewhere_median_edge_mm": None, "elsewhere_max_edge_mm": None}
+    text = summary({**rep, "sizing_achieved": achieved}, {"cached": True, "mesh_s": 0.1}, built[0])
+    assert "elsewhere none mm" in text and "volar fine zone 0." in text

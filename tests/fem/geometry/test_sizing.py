@@ -1,7 +1,8 @@
 """Sizes that converge: smooth section outlines (the model resampled on rays for the mesh size),
 `--size` refining every layer in proportion (2D and 3D), distinct 3D meshes at 1.0 and 0.7 mm,
 region ends at mesh vertices, and the achieved sizes model.json reports. 2D meshes, and the 3D
-monkey at 1.0 and 0.7 mm once per module (through the mesh cache, as `mesh` runs)."""
+monkey at 1.0 and 0.7 mm once per module (through the mesh cache, as `mesh` runs, which
+tests/fem/geometry/test_mesh3d.py and the thesis-claim tests share)."""
 import json
 
 import numpy as np

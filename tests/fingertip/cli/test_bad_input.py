@@ -216,23 +216,19 @@ def _interrupt(argv, env, sig, after_s):
 @pytest.mark.slow
 @pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
 def test_interrupt_while_meshing(tmp_path, sig, code):
-    """Ctrl-C or SIGTERM during pytetwild: one line, nothing in --out, no cache entry; a re-run
-    then meshes as a clean run does."""
-    env = {**os.environ, "FINGERTIP_CACHE_DIR": str(tmp_path / "cache")}
+    """Ctrl-C or SIGTERM during pytetwild: one line within seconds, nothing in --out, no lock or
+    partial folder beside it, and nothing in the mesh cache but the fixed-seed library (no entry
+    a later run could read)."""
+    cache = tmp_path / "cache"
+    env = {**os.environ, "FINGERTIP_CACHE_DIR": str(cache)}
     out = tmp_path / "m"
     argv = ["mesh", "--preset", "monkey", "--size", "1.5", "--out", out, "--quiet"]
     rc, err, seconds = _interrupt(argv, env, sig, 1.5)
     assert rc == code, err
     assert err.strip().splitlines() == ["error: interrupted; nothing was written"]
     assert seconds < 5
-    assert not out.exists() and not list(tmp_path.glob(".m.partial-*"))
-    assert not list((tmp_path / "cache").rglob("*.npz"))
-    if sig != signal.SIGINT:                        # one re-run shows the cache was left clean
-        return
-    done = subprocess.run([sys.executable, str(ROOT / "pipeline.py"), *map(str, argv)], cwd=ROOT, env=env,
-                          capture_output=True, text=True, timeout=300)
-    assert done.returncode == 0, done.stderr
-    assert (out / "mesh.vtu").is_file() and len(list((tmp_path / "cache").rglob("*.npz"))) == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cache"]
+    assert {p.relative_to(cache).parts[0] for p in cache.rglob("*") if p.is_file()} <= {"native"}
 
 
 # --------------------------------------------------------------------------- escapes found by a user
