@@ -5,8 +5,9 @@ at one `MeshLevel` and keeps them for resumed runs.
 
 A finding's verdict and reason are computed from its checks, never stored: a check is
 "reproduced" when its number lies inside the band the thesis's words give, "differs" when it lies
-outside, and "within mesh uncertainty" when the band's edge is nearer than the change of the
-number between the two mesh levels the claim ran on. The claims themselves are in
+outside, and "within mesh uncertainty" when the band's edge is nearer than the number's mesh
+uncertainty: Roache's grid convergence index of the finer of the two mesh levels the claim ran on,
+SAFETY_FACTOR |fine - coarse| / (r^ORDER - 1) with r the levels' refinement ratio. The claims themselves are in
 fem.thesis.chapter4_* (chapter 4 and the appendices: plane-strain models) and
 fem.thesis.chapters5_7 (the 3D presets and their sections); fem.thesis.claims lists them.
 Units: mm, N (N/mm on the 2D models), MPa.
@@ -26,6 +27,14 @@ from fem.io.modelfolder import CONTACT_REGION, factorise, folder_info, folder_ma
 from fingertip.progress import as_progress
 
 REPRODUCED, DIFFERS, UNCERTAIN = "reproduced", "differs", "within mesh uncertainty"
+SAFETY_FACTOR = 3.0
+"""Roache's factor of safety for a grid convergence index from two meshes (P. J. Roache,
+Verification and Validation in Computational Science and Engineering, 1998): a two-level change
+understates the error of the finer level, most when both levels share a bias."""
+ORDER = 1.0
+"""The order of convergence assumed in the index: first, the lowest of the reported measures
+(contact widths and areas step with the node spacing); the fingertip benchmark observes 2 to 7
+where its changes shrink at all (docs/benchmarks.md), so first order is the cautious choice."""
 VERDICTS = (REPRODUCED, UNCERTAIN, DIFFERS)
 
 #: Check.test -> how it reads in a reason.
@@ -49,7 +58,9 @@ class Check:
     what: the quantity, in words (no numbers that change with the run); value: it, on the finer
     mesh; test: '>' (value above limit), '<' (below) or '~' (within tol of limit); unit: of value,
     limit and tol; coarse: the same number on the coarser mesh level (None where the claim ran on
-    one level only); why: where the band comes from, when the thesis gives no number."""
+    one level only); factor: the multiple of |value - coarse| taken as its mesh uncertainty
+    (`uncertainty_factor` of the two levels, set by `with_coarse`); why: where the band comes
+    from, when the thesis gives no number."""
     what: str
     value: float
     test: str
@@ -57,6 +68,7 @@ class Check:
     unit: str = ""
     tol: float = 0.0
     coarse: float | None = None
+    factor: float = 1.0
     why: str = ""
 
     def __post_init__(self):
@@ -78,11 +90,11 @@ class Check:
 
     @property
     def uncertainty(self) -> float:
-        """|value - coarse|: how much the number moved from the coarser to the finer mesh (0 when
+        """factor |value - coarse|: the mesh uncertainty of the number on the finer mesh (0 when
         run on one level; NaN when the coarse value is not finite)."""
         if self.coarse is None:
             return 0.0
-        return abs(self.value - self.coarse) if math.isfinite(self.coarse) else math.nan
+        return self.factor * abs(self.value - self.coarse) if math.isfinite(self.coarse) else math.nan
 
     @property
     def outcome(self) -> str:
@@ -182,16 +194,18 @@ class Finding:
         return cls(**data)
 
 
-def with_coarse(fine: list[Finding], coarse: list[Finding]) -> list[Finding]:
+def with_coarse(fine: list[Finding], coarse: list[Finding], factor: float = 1.0) -> list[Finding]:
     """The findings of the finer mesh level with each check's `coarse` set from the same claim run
-    on the coarser level (matched by key, then by position and `what`)."""
+    on the coarser level (matched by key, then by position and `what`) and its uncertainty
+    `factor` (`uncertainty_factor` of the two levels)."""
     by_key = {f.key: f for f in coarse}
     out = []
     for f in fine:
         other = by_key.get(f.key)
         if other is None or [c.what for c in other.checks] != [c.what for c in f.checks]:
             raise ValueError(f"finding {f.key}: the coarse level's checks do not match the fine level's")
-        out.append(replace(f, checks=[replace(c, coarse=o.value) for c, o in zip(f.checks, other.checks)]))
+        out.append(replace(f, checks=[replace(c, coarse=o.value, factor=float(factor))
+                                      for c, o in zip(f.checks, other.checks)]))
     return out
 
 
@@ -218,6 +232,14 @@ LEVELS = (MeshLevel("0.25 mm 2D, 1.5 mm 3D", 0.25, 1.5), MeshLevel("0.125 mm 2D,
 def levels(quick: bool) -> tuple[MeshLevel, MeshLevel]:
     """(coarser, finer) mesh levels of a quick or a full run."""
     return (LEVELS[0], LEVELS[1]) if quick else (LEVELS[1], LEVELS[2])
+
+
+def uncertainty_factor(coarse: MeshLevel, fine: MeshLevel) -> float:
+    """SAFETY_FACTOR / (r^ORDER - 1), r the smaller of the levels' 2D and 3D size ratios: the
+    multiple of a number's change between the levels taken as its mesh uncertainty (quick run:
+    r = 1.5, 6; full run: r = 2, 3)."""
+    r = min(coarse.size2d_mm / fine.size2d_mm, coarse.size3d_mm / fine.size3d_mm)
+    return SAFETY_FACTOR / (r**ORDER - 1)
 
 
 class Workshop:

@@ -2,7 +2,8 @@
 folder and write index.html and index.md there, one section per thesis figure or table.
 
 Each claim runs on the coarser and the finer level of the run (fem.thesis.findings.levels); its
-findings are judged on the finer level with the change from the coarser as their mesh uncertainty.
+findings are judged on the finer level, their mesh uncertainty the change from the coarser times
+`fem.thesis.findings.uncertainty_factor` (a grid convergence index: 6 in a quick run, 3 in a full one).
 A claim's findings at each level are kept as claims/levels/<level>/<name>.json and, merged, as
 claims/<name>.json with their PNGs; a rerun into the same folder skips what is there (resume after
 an interrupt) and re-meshes nothing it has.
@@ -18,15 +19,16 @@ from pathlib import Path
 from fem.plots import finding_figure, save
 from fem.thesis import claims as thesis
 from fem.thesis.claims import NOT_RUN
-from fem.thesis.findings import VERDICTS, Finding, Workshop, levels, number, with_coarse
+from fem.thesis.findings import VERDICTS, Finding, Workshop, levels, number, uncertainty_factor, with_coarse
 from fingertip.errors import InputError
 from fingertip.progress import as_progress
 from fingertip.provenance import provenance
 from fingertip.staging import atomic_write, check_output_dir, write_json
 
 MANIFEST = "reproduce.json"
-#: Format of reproduce.json and claims/*.json: 2 adds the checks, the two mesh levels and the provenance.
-FORMAT = 2
+#: Format of reproduce.json and claims/*.json: 2 adds the checks, the two mesh levels and the provenance;
+#: 3 the checks' uncertainty factor.
+FORMAT = 3
 
 
 def check_out(out, quick: bool) -> Path:
@@ -86,7 +88,8 @@ def run_reproduce(out, quick: bool = False, progress=True) -> str:
             findings += [Finding.from_json(f) for f in json.loads(path.read_text())]
             resumed += 1
             continue
-        new = with_coarse(_claim_at(fine, name, claim, out, progress), _claim_at(coarse, name, claim, out, progress))
+        new = with_coarse(_claim_at(fine, name, claim, out, progress), _claim_at(coarse, name, claim, out, progress),
+                          uncertainty_factor(coarse_level, fine_level))
         with progress.task(f"figures of claim '{name}'"):
             for f in new:
                 save(finding_figure(f), out / "claims" / f"{f.key}.png")
@@ -145,7 +148,9 @@ def _levels_text(quick: bool) -> str:
 
 JUDGED = ("Every finding quotes the thesis and judges the project's numbers against the band its words "
           "give. Each number is computed on two mesh levels: the value shown is the finer mesh's, the mesh "
-          "uncertainty the change from the coarser. A check is *reproduced* when its value lies inside the "
+          "uncertainty its grid convergence index, 3 |fine - coarse| / (r - 1) with r the levels' refinement "
+          "ratio (Roache's factor of safety 3 for two meshes, first order assumed): 6 times the change in a "
+          "quick run (r = 1.5), 3 times in a full one (r = 2). A check is *reproduced* when its value lies inside the "
           "band by more than the mesh uncertainty, *differs* when it lies outside by more, and is *within "
           "mesh uncertainty* otherwise; a finding differs if any check differs, is within mesh uncertainty "
           "if any check is, and is reproduced otherwise.")

@@ -14,6 +14,7 @@ from fem.thesis.findings import (
     Check,
     Finding,
     levels,
+    uncertainty_factor,
     verdict_of,
     with_coarse,
 )
@@ -22,11 +23,12 @@ from tests.helpers import assert_computed
 finite = st.floats(-1e6, 1e6, allow_nan=False)
 
 
-@given(value=finite, limit=finite, coarse=st.none() | finite, test=st.sampled_from(["<", ">"]))
-def test_one_sided_check_outcome(value, limit, coarse, test):
-    c = Check("x", value, test, limit, coarse=coarse)
+@given(value=finite, limit=finite, coarse=st.none() | finite, test=st.sampled_from(["<", ">"]),
+       factor=st.sampled_from([1.0, 3.0, 6.0]))
+def test_one_sided_check_outcome(value, limit, coarse, test, factor):
+    c = Check("x", value, test, limit, coarse=coarse, factor=factor)
     margin = value - limit if test == ">" else limit - value
-    spread = 0.0 if coarse is None else abs(value - coarse)
+    spread = 0.0 if coarse is None else factor * abs(value - coarse)
     assert c.margin == pytest.approx(margin)
     if spread > 0 and abs(margin) <= spread:
         assert c.outcome == UNCERTAIN
@@ -79,3 +81,16 @@ def test_levels_merge_by_key_and_check():
 def test_quick_and_full_runs_use_two_neighbouring_levels():
     (c1, f1), (c2, f2) = levels(True), levels(False)
     assert f1 == c2 and c1.size2d_mm == 2 * f1.size2d_mm and f2.size2d_mm == 0.0625 and f2.size3d_mm == 0.5
+
+
+def test_the_uncertainty_is_the_grid_convergence_index_of_the_levels():
+    """3 |fine - coarse| / (r - 1): quick levels r = 1.5 (the 3D sizes 1.5 and 1 mm; 2D halves), factor
+    6; full levels r = 2, factor 3; with_coarse hands it to every check."""
+    assert uncertainty_factor(*levels(True)) == pytest.approx(6.0)
+    assert uncertainty_factor(*levels(False)) == pytest.approx(3.0)
+    fine = [Finding("k", "1", "t", "words", [Check("a", 2.0, ">", 1.0, "mm")])]
+    coarse = [Finding("k", "1", "t", "words", [Check("a", 1.8, ">", 1.0, "mm")])]
+    (merged,) = with_coarse(fine, coarse, 6.0)
+    check = merged.checks[0]
+    assert check.uncertainty == pytest.approx(1.2) and check.outcome == UNCERTAIN     # 1.0 inside, 6 x 0.2
+    assert Finding.from_json(merged.to_json()).checks[0].uncertainty == pytest.approx(1.2)
