@@ -56,7 +56,8 @@ def table(data: dict) -> str:
     lines = [BEGIN, "",
              f"Full run: {len(findings)} findings, " + ", ".join(f"{n[v]} {v}" for v in VERDICTS) + ". Mesh levels: "
              + "; ".join(f"{lv['size2d_mm']:g} mm (2D) / {lv['size3d_mm']:g} mm (3D)" for lv in levels)
-             + " (each number on the finer level, +- its mesh uncertainty, the grid convergence index). Produced by "
+             + " (each number on the finer level, +- its mesh uncertainty: the grid convergence index, at least the "
+             "measure's resolution). Produced by "
              f"{made['package']} {made['version']}" + (f", commit {made['commit']}" if made["commit"] else "")
              + f", {made['date'][:10]}, on {made['machine']['cores']} cores.", "",
              "| thesis | claim | verdict | checks: value +- mesh uncertainty (band) |", "|---|---|---|---|"]

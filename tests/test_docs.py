@@ -122,14 +122,9 @@ def test_reproduction_table_is_the_full_runs():
 
 
 
-#: docs/reproduction.md's quick-against-full table: the findings whose quick verdict neither agrees
-#: with the full run's nor says "within mesh uncertainty" (no resolution floor yet).
-QUICK_MISSES = {"sec7-1-2_gradual", "fig6-39_step_inverse_trend", "fig6-39_step_extremes"}
-
-
-def test_stored_runs_are_judged_by_the_current_rule_and_the_quick_misses_are_the_documented_ones():
-    """Both stored runs carry the uncertainty factor of their levels, and a quick verdict that is
-    neither the full run's nor 'within mesh uncertainty' is one of the three the docs list."""
+def test_quick_verdicts_agree_with_the_full_run_or_say_mesh_uncertainty():
+    """The trust issue's rule on the stored runs: both carry the uncertainty factor of their levels,
+    and a --quick verdict that is not the full run's is 'within mesh uncertainty'."""
     import json
 
     from fem.thesis.findings import UNCERTAIN, Finding, levels, uncertainty_factor
@@ -138,13 +133,11 @@ def test_stored_runs_are_judged_by_the_current_rule_and_the_quick_misses_are_the
     runs = {}
     for path, quick in ((rep.DATA, False), (rep.QUICK, True)):
         data = json.loads(path.read_text())
-        assert data["manifest"]["quick"] is quick
+        assert data["manifest"]["quick"] is quick and data["manifest"]["format"] == 3
         runs[quick] = {f["key"]: Finding.from_json(f) for f in data["findings"]}
         factors = {c.factor for f in runs[quick].values() for c in f.checks if c.coarse is not None}
         assert factors == {uncertainty_factor(*levels(quick))}
     full, quick = runs[False], runs[True]
     assert set(quick) == set(full)
-    misses = {k for k, f in quick.items() if f.verdict not in (full[k].verdict, UNCERTAIN)}
-    assert misses == QUICK_MISSES
-    text = rep.DOC.read_text()
-    assert "42 of 45 agree" in text and len(quick) - len(misses) == 42
+    for key, f in quick.items():
+        assert f.verdict in (full[key].verdict, UNCERTAIN), (key, f.verdict, full[key].verdict)

@@ -3,7 +3,8 @@ as height profiles, the compliance of the contact candidates, and the contact so
 per indentation; force control, sweeps).
 
 Modules: indentors (make_indentor, the thesis catalogue), compliance (condensed and lazy
-compliance), linear (ContactModel, solve_lcp, reach).
+compliance), facets (the surface's areas, pressure recovery and node neighbours), linear
+(ContactModel, solve_lcp, reach).
 """
 from fingertip.lazy import lazy_exports
 

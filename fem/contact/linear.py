@@ -47,6 +47,7 @@ Any other elastic body works through `ContactModel(points, areas, compliance_for
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -58,6 +59,7 @@ from fem.contact.compliance import (
     FactorCompliance,
     RowCache,
 )
+from fem.contact.facets import fe_facets, node_pairs, smoothed_pressure
 from fem.core.linalg import SERIAL_BLAS_BELOW, blas_threads
 from fem.core.materials import BONE_LAYER
 from fingertip.errors import InputError
@@ -68,53 +70,6 @@ FORCE_RTOL = 1e-6
 """Relative tolerance on prescribed forces."""
 MAX_DEPTH_MM = 5.0
 """Depth limit of force control (mm) where the model's tissue is thicker (`tissue_mm`)."""
-
-
-# --------------------------------------------------------------------------- facets and pressure
-def facet_shares(facets, facet_area, dim) -> np.ndarray:
-    """(k, n_per_facet) share of each facet's area given to each of its nodes.
-
-    facets: (k, n) node indices (vertices first, then midside nodes); facet_area: (k,) mm^2 (mm
-    in 2D). P2 shares as `fem.core.model.Model.surface_nodes` (the facet cut into its linear
-    sub-facets): 3D 1/12 per vertex and 1/4 per edge node, 2D 1/4 and 1/2; P1: equal shares.
-    """
-    n = facets.shape[1]
-    if n == dim:
-        w = np.full(n, 1.0 / n)
-    else:
-        w = np.array([1 / 12] * 3 + [1 / 4] * 3) if dim == 3 else np.array([1 / 4, 1 / 4, 1 / 2])
-    return np.outer(facet_area, w)
-
-
-def smoothed_pressure(force_N, facets, shares) -> np.ndarray:
-    """(m,) contact pressure [MPa] recovered from nodal forces (m,) on facets (k, n) with area
-    shares (k, n): each node's force is spread over its facets in proportion to their shares,
-    giving a mean pressure per facet; a node's pressure is the share-weighted mean of its facets.
-    Exact for uniform pressure whatever the split of force between vertex and midside nodes
-    (node-to-surface contact on P2 loads midside nodes about twice as much as vertices)."""
-    area = np.bincount(facets.ravel(), shares.ravel(), minlength=len(force_N))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        per_area = np.where(area > 0, force_N / area, 0.0)
-    p_facet = (per_area[facets] * shares).sum(axis=1) / shares.sum(axis=1)
-    num = np.bincount(facets.ravel(), (shares * p_facet[:, None]).ravel(), minlength=len(force_N))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(area > 0, num / area, 0.0)
-
-
-def fe_facets(model, region: str, sn) -> tuple[np.ndarray, np.ndarray]:
-    """((k, n) candidate-local node indices, (k, n) area shares) of the facets of `region` of a
-    `fem.core.model.Model`, whose candidate nodes are `sn` (`Model.surface_nodes(region)`): the
-    `facets` argument of ContactModel."""
-    mesh, fids = model.mesh, model.region_facets(region)
-    fv = mesh.facets[:, fids]
-    mids = mesh.f2e[:, fids] if model.dim == 3 else fids[None]
-    facets = np.searchsorted(sn.nodes, np.vstack([fv, mids + mesh.nvertices]).T)
-    x = mesh.p[:, fv]
-    if model.dim == 3:
-        size = 0.5 * np.linalg.norm(np.cross((x[:, 1] - x[:, 0]).T, (x[:, 2] - x[:, 0]).T), axis=1)
-    else:
-        size = np.linalg.norm(x[:, 1] - x[:, 0], axis=0)
-    return facets, facet_shares(facets, size, model.dim)
 
 
 def point_text(x, digits: int = 2) -> str:
@@ -341,7 +296,7 @@ class ContactModel:
     points_mm: (m, dim) undeformed candidate node positions (dim 2: plane strain in x-y);
     areas_mm2: (m,) tributary areas; compliance_for: callable direction (3,) -> Compliance (one
     per approach direction, cached here); facets: optional ((k, n) candidate-local node indices,
-    (k, n) area shares) for the pressure recovery (`facet_shares`).
+    (k, n) area shares) for the pressure recovery (`fem.contact.facets.facet_shares`).
     """
 
     def __init__(self, points_mm, areas_mm2, compliance_for, tol_mm: float = GAP_TOL_MM, facets=None):
@@ -352,6 +307,7 @@ class ContactModel:
         self._compliance = {}
         self.tol_mm = tol_mm
         self._pending = []           # (result, compliance) awaiting observations
+        self._pairs = None           # node_pairs, built on first use
         self.restart()
 
     def restart(self) -> None:
@@ -381,6 +337,22 @@ class ContactModel:
         if key not in self._compliance:
             self._compliance[key] = self._compliance_for(np.asarray(direction, float))
         return self._compliance[key]
+
+    def edge_area_mm2(self, result: ContactResult) -> float:
+        """Tributary area [mm^2; mm in 2D] of the contact's outer ring: the nodes carrying force
+        next to one that does not (neighbours on the facets' linear sub-facets,
+        `fem.contact.facets.node_pairs`). A node-counted contact area (and a 2D contact width)
+        moves in steps of about this as the edge crosses the next ring of nodes, so it cannot
+        resolve a change smaller than it. NaN without facets."""
+        if self.facets is None:
+            return math.nan
+        if self._pairs is None:
+            self._pairs = node_pairs(self.facets[0], self.points_mm)
+        active, pairs = result.active, self._pairs
+        mixed = pairs[active[pairs[:, 0]] != active[pairs[:, 1]]]
+        edge = np.zeros(len(active), bool)
+        edge[mixed.ravel()] = True
+        return float(result.area_mm2[edge & active].sum())
 
     def first_touch_mm(self, indentor) -> np.ndarray:
         """(n_parts,) travel at which each part first touches the undeformed candidate surface."""

@@ -46,7 +46,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from fem.contact.compliance import Compliance, DenseReach, RowCache
-from fem.contact.linear import ContactModel, fe_facets
+from fem.contact.facets import fe_facets
+from fem.contact.linear import ContactModel
 from fem.io.modelfolder import CONDENSE_MAX_NODES, CONTACT_REGION, HELD, held_regions
 from fem.receptors.grid import ReceptorSampler
 from fingertip.progress import as_progress

@@ -159,12 +159,13 @@ def cylinder_runs(shop: Workshop) -> CylinderRuns:
         for level, F in levels.items():
             if label == "solid-fluid" and level == "F*":
                 continue
-            r = {"depth_mm": [], "width_mm": [], "max_pressure_MPa": [], "volume_change": []}
+            r = {"depth_mm": [], "width_mm": [], "width_resolution_mm": [], "max_pressure_MPa": [], "volume_change": []}
             for code in shop.progress.bar(codes, desc=f"{label} at {level}", unit="cylinder"):
                 ind = make_indentor(code)
                 res = cm.indent(ind, force_N=F, max_depth_mm=4.0)
                 r["depth_mm"].append(float(res.depth_mm.max()))
                 r["width_mm"].append(float(res.contact_area_mm2))
+                r["width_resolution_mm"].append(cm.edge_area_mm2(res))
                 r["max_pressure_MPa"].append(float(res.max_pressure_MPa))
                 if label == "solid-fluid":
                     u = cm.compliance(ind.approach).displacement(res.force_N)
@@ -272,30 +273,51 @@ def _solid_fluid_findings(runs: CylinderRuns, kappa) -> list[Finding]:
             ("absolute", " (in mm)", float(np.ptp(f_depth) / np.ptp(s_depth)), "in millimetres"))]
 
 
+def _resolution(fn, widths, resolution) -> float:
+    """Largest change of fn(widths) [its unit] when the C1 and C8 widths (first and last) each move
+    by up to their resolution (`ContactModel.edge_area_mm2`): what node-counted widths cannot tell."""
+    base = fn(widths)
+    out = 0.0
+    for s0 in (-1, 1):
+        for s8 in (-1, 1):
+            w = np.array(widths, float)
+            w[0] += s0 * resolution[0]
+            w[-1] += s8 * resolution[-1]
+            out = max(out, abs(fn(w) - base))
+    return out
+
+
 def _contact_findings(runs: CylinderRuns, kappa) -> list[Finding]:
     """Figure 4-25: contact widths and peak pressures, 'the reduction was more rapid' read as a
     relative and as an absolute fall."""
     R = runs.results
     fluid, held10 = R[("solid-fluid", "F*/10")], R[("solid, bone held", "F*/10")]
-    drop = {"relative": lambda r: float(100 * (1 - r["width_mm"][0] / r["width_mm"][-1])),
-            "absolute": lambda r: float(r["width_mm"][-1] - r["width_mm"][0])}
+    drop = {"relative": lambda w: float(100 * (1 - w[0] / w[-1])), "absolute": lambda w: float(w[-1] - w[0])}
+    fall = {(name, r is fluid): (fn(r["width_mm"]), _resolution(fn, r["width_mm"], r["width_resolution_mm"]))
+            for name, fn in drop.items() for r in (held10, fluid)}
+    gap = fluid["width_mm"] - held10["width_mm"]
+    i = int(np.argmin(gap))
     units = {"relative": "%", "absolute": "mm"}
     widths = [Series(f"{label}, {level}", kappa.tolist(), r["width_mm"].tolist()) for (label, level), r in R.items()]
     width_note = (f"Contact widths C1-C8 at F*/10: solid {held10['width_mm'].min():.2f}-"
                   f"{held10['width_mm'].max():.2f} mm, solid-fluid {fluid['width_mm'].min():.2f}-"
-                  f"{fluid['width_mm'].max():.2f} mm; widths are measured between contacting surface nodes, so "
-                  f"they step with the node spacing.")
+                  f"{fluid['width_mm'].max():.2f} mm; widths are sums of the contacting nodes' tributary lengths, so "
+                  f"they step with the node spacing: each is known to within its edge nodes' length "
+                  f"({min(held10['width_resolution_mm'].min(), fluid['width_resolution_mm'].min()):.3f}-"
+                  f"{max(held10['width_resolution_mm'].max(), fluid['width_resolution_mm'].max()):.3f} mm), the "
+                  f"checks' resolution.")
     contact = [Finding(
         f"fig4-25_contact_{name}", "4.6, figure 4-25", "Contact width and peak pressure against curvature",
         QUOTES["fig4-25_contact"],
-        [Check("smallest solid-fluid minus solid contact width, C1-C8 at F*/10",
-               float(np.min(fluid["width_mm"] - held10["width_mm"])), ">", 0.0, "mm"),
+        [Check("smallest solid-fluid minus solid contact width, C1-C8 at F*/10", float(gap[i]), ">", 0.0, "mm",
+               resolution=float(fluid["width_resolution_mm"][i] + held10["width_resolution_mm"][i])),
          Check("smallest solid over solid-fluid peak pressure, C1-C8 at F*/10",
                float(np.min(held10["max_pressure_MPa"] / fluid["max_pressure_MPa"])), ">", 1.0),
-         Check(f"fall of the contact width from C8 to C1, solid model (F*/10, {name})", drop[name](held10), ">",
-               0.0, units[name]),
+         Check(f"fall of the contact width from C8 to C1, solid model (F*/10, {name})", fall[(name, False)][0], ">",
+               0.0, units[name], resolution=fall[(name, False)][1]),
          Check(f"fall of the contact width from C8 to C1, solid-fluid minus solid model (F*/10, {name})",
-               drop[name](fluid) - drop[name](held10), ">", 0.0, units[name])],
+               fall[(name, True)][0] - fall[(name, False)][0], ">", 0.0, units[name],
+               resolution=fall[(name, True)][1] + fall[(name, False)][1])],
         width_note, "cylinder curvature 1/R [1/mm]", "contact width [mm]", widths, [], logx=True,
         reading=f"'the reduction was more rapid' {how}")
         for name, how in (("relative", "as a fall relative to the C8 width"), ("absolute", "as a fall in mm"))]

@@ -298,7 +298,9 @@ def bars_3d(shop: Workshop) -> list[Finding]:
                      "section_below_10pct": fraction[m], "deflection_1mm_outside_mm": outside[m],
                      "contact_area_mm2": run.result.contact_area_mm2, "force_N": run.result.total_force_N})
     deeper = {m: peak[(m, 1.0)] / peak[(m, 0.75)] for m in runs}
-    wider = runs["m43338"].result.contact_area_mm2 / runs["m33338"].result.contact_area_mm2
+    touched = {m: (run.result.contact_area_mm2, run.contact.edge_area_mm2(run.result)) for m, run in runs.items()}
+    wider = touched["m43338"][0] / touched["m33338"][0]
+    wider_resolution = wider * sum(edge / a for a, edge in touched.values())    # each area within its edge nodes'
     spread = outside["m43338"] / outside["m33338"]
     epidermis = params_for("monkey").epidermis_mm
     return [Finding(
@@ -321,10 +323,12 @@ def bars_3d(shop: Workshop) -> list[Finding]:
         QUOTES["sec7-1-2_gradual"],
         [Check("surface deflection 1 mm beyond the bar's edges, m43338 over m33338", spread, ">", 1.0,
                why="'more gradual' read as more deflection beside the bar"),
-         Check("contact area, m43338 over m33338", wider, ">", 1.0, why="'a wider area of contact'")],
+         Check("contact area, m43338 over m33338", wider, ">", 1.0, resolution=wider_resolution,
+               why="'a wider area of contact'")],
         f"Deflection 1 mm outside the bar: m43338 {outside['m43338']:.3f} mm, m33338 {outside['m33338']:.3f} mm "
-        f"(section z = {z0:.2f} mm); contact areas {runs['m43338'].result.contact_area_mm2:.2f} and "
-        f"{runs['m33338'].result.contact_area_mm2:.2f} mm^2.",
+        f"(section z = {z0:.2f} mm); contact areas {touched['m43338'][0]:.2f} and {touched['m33338'][0]:.2f} mm^2, "
+        f"each known to within its edge nodes' area ({touched['m43338'][1]:.2f} and {touched['m33338'][1]:.2f} "
+        f"mm^2).",
         "x across the pad [mm]", "surface deflection [mm]", surface, rows)]
 
 
@@ -406,6 +410,22 @@ def _rank_correlation(a, b) -> float:
     """Spearman rank correlation of two (k,) arrays."""
     ra, rb = (np.argsort(np.argsort(v)) for v in (a, b))
     return float(np.corrcoef(ra, rb)[0, 1])
+
+
+def _rank_resolution(a, a_resolution, b, draws: int = 256) -> float:
+    """Largest change of the rank correlation of a (k,) with b (k,) when each a moves uniformly
+    within +- its resolution (seeded draws): what node-counted areas cannot tell apart."""
+    rng = np.random.default_rng(0)
+    base = _rank_correlation(a, b)
+    moved = a + rng.uniform(-1.0, 1.0, (draws, len(a))) * a_resolution
+    return float(max(abs(_rank_correlation(m, b) - base) for m in moved))
+
+
+def _extreme_spread(x, a, a_resolution, k: int) -> float:
+    """Farthest position [mm] from x[k] whose node-counted area a cannot be told from a[k]'s (the
+    two differ by less than their resolutions together): how far the extreme at k may lie."""
+    same = np.abs(a - a[k]) <= a_resolution + a_resolution[k]
+    return float(np.abs(x[same] - x[k]).max())
 
 
 def contact_vs_diameter(shop: Workshop) -> list[Finding]:
@@ -494,11 +514,13 @@ def steps_3d(shop: Workshop) -> list[Finding]:
     results = [cm.indent(ind, force_N=force)
                for ind in shop.progress.bar(steps, desc="step 5 across the pad", unit="position")]
     area = np.array([r.contact_area_mm2 for r in results])
+    area_resolution = np.array([cm.edge_area_mm2(r) for r in results])
     pressure = np.array([1e3 * r.max_pressure_MPa for r in results])
     # where on the step it peaks
     at_v = [float(cm.points_mm[np.argmax(r.pressure_MPa), 0] - x) for r, x in zip(results, positions)]
     sed = np.array([sampler.measures(r.observed, ["sed_MPa"])["sed_MPa"] for r in results])   # (positions, receptors)
     rho = _rank_correlation(area, pressure)
+    rho_resolution = _rank_resolution(area, area_resolution, pressure)
     opposite = float(100 * np.mean(np.sign(np.diff(area)) * np.sign(np.diff(pressure)) < 0))
     # the pad's top, from the model's geometry: the point of the section's outer curve farthest against the
     # approach; the datum puts it over the rise's convex half (v in [0, L/2]) for datums in [x_top - L/2,
@@ -527,7 +549,7 @@ def steps_3d(shop: Workshop) -> list[Finding]:
         "contact area [mm^2]", "peak pressure [kPa]", scatter, rows, reading=how)
         for name, check, how in (
             ("trend", Check("rank correlation of contact area with peak pressure over the positions", rho, "<", -0.8,
-                            why="an inverse trend"), "'always accompanied by a decrease' as an inverse trend"),
+                            resolution=rho_resolution, why="an inverse trend"), "'always accompanied by a decrease' as an inverse trend"),
             ("every_step", Check("moves between neighbouring positions where area and peak pressure change in "
                                  "opposite senses", opposite, ">", 99.9, "%", why="all of them"),
              "'always accompanied by a decrease ... and vice-versa' at every move of the step"))]
@@ -535,9 +557,11 @@ def steps_3d(shop: Workshop) -> list[Finding]:
         "fig6-39_step_extremes", "6.3.3, figure 6-39",
         "Where the contact is smallest and largest as step 5 crosses the pad (3D monkey)", QUOTES["fig6-39_step_extremes"],
         [Check("datum of the smallest contact, from the middle of the convex-half datums", x_min - (x_top - L / 4), "~",
-               0.0, "mm", tol=half, why="the convex half over the pad's top, widened by half a position step"),
+               0.0, "mm", tol=half, resolution=_extreme_spread(positions, area, area_resolution, np.argmin(area)),
+               why="the convex half over the pad's top, widened by half a position step"),
          Check("datum of the largest contact, from the middle of the concave-half datums", x_max - (x_top - 3 * L / 4),
-               "~", 0.0, "mm", tol=half, why="the concave half over the pad's top, widened by half a position step")],
+               "~", 0.0, "mm", tol=half, resolution=_extreme_spread(positions, area, area_resolution, np.argmax(area)),
+               why="the concave half over the pad's top, widened by half a position step")],
         f"Smallest contact {area.min():.2f} mm^2 at datum {x_min:+.2f} mm, largest {area.max():.2f} mm^2 at "
         f"{x_max:+.2f} mm; {where}.", "step position (datum) [mm]", "contact area [mm^2]", by_place, rows,
         y2label="peak pressure [kPa]"), *inverse, _spatial_response(positions, receptors_x, sed, force)]

@@ -59,8 +59,11 @@ class Check:
     mesh; test: '>' (value above limit), '<' (below) or '~' (within tol of limit); unit: of value,
     limit and tol; coarse: the same number on the coarser mesh level (None where the claim ran on
     one level only); factor: the multiple of |value - coarse| taken as its mesh uncertainty
-    (`uncertainty_factor` of the two levels, set by `with_coarse`); why: where the band comes
-    from, when the thesis gives no number."""
+    (`uncertainty_factor` of the two levels, set by `with_coarse`); resolution: the smallest change
+    the measure can show on the finer mesh (a node-counted contact area or width: its edge nodes'
+    area, `fem.contact.linear.ContactModel.edge_area_mm2`; a position sampled in steps: half the
+    step), the floor of the uncertainty; why: where the band comes from, when the thesis gives no
+    number."""
     what: str
     value: float
     test: str
@@ -69,12 +72,14 @@ class Check:
     tol: float = 0.0
     coarse: float | None = None
     factor: float = 1.0
+    resolution: float = 0.0
     why: str = ""
 
     def __post_init__(self):
         if self.test not in TESTS:
             raise ValueError(f"Check.test must be one of {', '.join(TESTS)}, not {self.test!r}")
         self.value, self.limit, self.tol = float(self.value), float(self.limit), float(self.tol)
+        self.resolution = float(self.resolution)
 
     @property
     def margin(self) -> float:
@@ -90,11 +95,14 @@ class Check:
 
     @property
     def uncertainty(self) -> float:
-        """factor |value - coarse|: the mesh uncertainty of the number on the finer mesh (0 when
-        run on one level; NaN when the coarse value is not finite)."""
+        """The mesh uncertainty of the number on the finer mesh: factor |value - coarse|, at least
+        the resolution (the resolution alone when run on one level; NaN when the coarse value is not
+        finite)."""
         if self.coarse is None:
-            return 0.0
-        return self.factor * abs(self.value - self.coarse) if math.isfinite(self.coarse) else math.nan
+            return self.resolution
+        if not math.isfinite(self.coarse):
+            return math.nan
+        return max(self.factor * abs(self.value - self.coarse), self.resolution)
 
     @property
     def outcome(self) -> str:
@@ -117,9 +125,9 @@ class Check:
     def text(self) -> str:
         """The check as a sentence: value with its mesh uncertainty, band, outcome."""
         u = f" {self.unit}" if self.unit else ""
-        spread = ""
-        if self.coarse is not None:
-            spread = f" (coarser mesh {number(self.coarse)}{u}: mesh uncertainty {number(self.uncertainty, 2)}{u})"
+        parts = ([f"coarser mesh {number(self.coarse)}{u}"] if self.coarse is not None else []) + (
+            [f"resolution {number(self.resolution, 2)}{u}"] if self.resolution > 0 else [])
+        spread = f" ({', '.join(parts)}: mesh uncertainty {number(self.uncertainty, 2)}{u})" if parts else ""
         why = f"; {self.why}" if self.why else ""
         return f"{self.what}: {number(self.value)}{u}{spread}; judged {self.band()}{why}: {self.outcome}."
 

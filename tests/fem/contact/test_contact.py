@@ -217,3 +217,36 @@ def test_held_nodes_block_the_indentor_with_a_clear_error():
     assert abs(res.total_force_N / (1.2 * ok.total_force_N) - 1) < 1e-6
     with pytest.raises(InputError, match="force .* held fixed"):
         blocked.indent(sphere, force_N=100 * ok.total_force_N)
+
+
+def test_edge_area_is_the_contact_rings_tributary_area():
+    """A row of 2D P2 facets (vertices 0, 2, 4, ..., midside nodes between): with nodes 3-9 in
+    contact, the outer ring is nodes 3 and 9 (each next to an inactive node on a sub-facet), and
+    their tributary lengths sum; all in contact, no ring. A 3D P2 triangle whose midside nodes are
+    listed out of edge order: the neighbours are found from the positions."""
+    from types import SimpleNamespace
+
+    ContactModel = contact.ContactModel
+    x = np.linspace(0.0, 6.0, 13)                             # 6 P2 facets of 1 mm
+    facets = np.array([[2 * k, 2 * k + 2, 2 * k + 1] for k in range(6)])
+    areas = np.full(13, 0.5)                                   # P2 shares: 1/4 + 1/4 at a vertex, 1/2 midside
+    areas[[0, -1]] = 0.25
+    cm = ContactModel(np.column_stack([x, np.zeros(13)]), areas, None, facets=(facets, np.ones((6, 3))))
+    active = np.zeros(13, bool)
+    active[3:10] = True
+    assert cm.edge_area_mm2(SimpleNamespace(active=active, area_mm2=areas)) == pytest.approx(areas[[3, 9]].sum())
+    active[:] = True
+    assert cm.edge_area_mm2(SimpleNamespace(active=active, area_mm2=areas)) == 0.0
+    assert np.isnan(ContactModel(x[:, None], areas, None).edge_area_mm2(SimpleNamespace(active=active,
+                                                                                          area_mm2=areas)))
+    v = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    p = np.vstack([v, 0.5 * (v[1] + v[2]), 0.5 * (v[0] + v[2]), 0.5 * (v[0] + v[1])])   # m12, m02, m01
+    tri = ContactModel(p, np.arange(1.0, 7.0), None, facets=(np.arange(6)[None], np.ones((1, 6))))
+    from fem.contact.facets import node_pairs
+
+    assert {tuple(q) for q in node_pairs(np.arange(6)[None], p)} == {(0, 4), (0, 5), (1, 3), (1, 5), (2, 3), (2, 4),
+                                                    (3, 4), (3, 5), (4, 5)}
+    one = np.array([True, False, False, False, False, False])
+    assert tri.edge_area_mm2(SimpleNamespace(active=one, area_mm2=np.arange(1.0, 7.0))) == 1.0
+    two = one | (np.arange(6) == 5)                          # v0 and m01: both next to inactive nodes
+    assert tri.edge_area_mm2(SimpleNamespace(active=two, area_mm2=np.arange(1.0, 7.0))) == 1.0 + 6.0

@@ -94,3 +94,15 @@ def test_the_uncertainty_is_the_grid_convergence_index_of_the_levels():
     check = merged.checks[0]
     assert check.uncertainty == pytest.approx(1.2) and check.outcome == UNCERTAIN     # 1.0 inside, 6 x 0.2
     assert Finding.from_json(merged.to_json()).checks[0].uncertainty == pytest.approx(1.2)
+
+
+def test_the_resolution_is_the_floor_of_the_uncertainty():
+    """A node-counted measure that does not move between the levels is still uncertain by its
+    resolution: 0.913 against 'above 1' with resolution 0.2 is within mesh uncertainty, with none
+    it differs; on one level the resolution alone is the uncertainty; the text names it."""
+    c = Check("contact area ratio", 0.913, ">", 1.0, coarse=0.913, factor=6.0, resolution=0.2)
+    assert c.uncertainty == pytest.approx(0.2) and c.outcome == UNCERTAIN
+    assert "resolution 0.2: mesh uncertainty 0.2" in c.text()
+    assert Check("contact area ratio", 0.913, ">", 1.0, coarse=0.913, factor=6.0).outcome == DIFFERS
+    assert Check("x", 1.1, ">", 1.0, resolution=0.2).outcome == UNCERTAIN
+    assert Check("x", 1.1, ">", 1.0, coarse=0.5, factor=3.0, resolution=0.2).uncertainty == pytest.approx(1.8)

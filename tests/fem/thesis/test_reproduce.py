@@ -8,7 +8,7 @@ import pytest
 import pipeline
 from fem.thesis import chapter4_mechanics
 from fem.thesis import claims as thesis
-from fem.thesis.findings import DIFFERS, REPRODUCED
+from fem.thesis.findings import DIFFERS, REPRODUCED, UNCERTAIN
 from tests.helpers import by_key
 
 
@@ -47,9 +47,13 @@ def test_cylinders_follow_plane_strain_hertz_not_a_square_root_law(shop):
     assert findings["fig4-24_solid_fluid_relative"].verdict == REPRODUCED          # 0.56 of the solid's spread
     assert findings["fig4-24_solid_fluid_absolute"].verdict == DIFFERS             # 6.9 times it in mm
     contact = findings["fig4-25_contact_relative"]
-    # one contact node spacing (0.25 mm) wider at the smallest difference: the widths on 0.25 mm elements
-    assert contact.checks[0].value == pytest.approx(0.25, abs=0.01) and contact.checks[0].outcome == REPRODUCED
-    assert [c.outcome for c in contact.checks[1:]] == [REPRODUCED] * 3
+    # one contact node spacing (0.25 mm) wider at the smallest difference: the widths on 0.25 mm elements,
+    # each known to within its outer ring of nodes, so the difference is within its resolution (0.5 mm)
+    # (measured 0.5 mm: two rings of one node, 0.125 mm each side, per width), as are the falls of the
+    # narrow C1 contact (resolution 57 % and 70 % of the C8 width)
+    gap = contact.checks[0]
+    assert gap.value == pytest.approx(0.25, abs=0.01) and gap.resolution == pytest.approx(0.5, rel=0.05)
+    assert [c.outcome for c in contact.checks] == [UNCERTAIN, REPRODUCED, UNCERTAIN, UNCERTAIN]
 
 
 def test_line_load_order_of_the_four_models(shop):

@@ -6,14 +6,15 @@ import numpy as np
 import pytest
 
 from fem.thesis import chapters5_7 as thesis3d
-from fem.thesis.findings import DIFFERS, REPRODUCED
+from fem.thesis.findings import DIFFERS, REPRODUCED, UNCERTAIN
 from tests.helpers import by_key
 
 
 def test_bar_in_3d_bends_the_stiff_epidermis_and_stays_local(shop):
     """Measured on the 1 mm (reproducible) mesh: SED 1.0 / 0.75 mm deep 1.23 (m43338), 0.94
     (m33338); 86 % and 82 % of the section below 10 % of the peak SED (thesis 85 %); deflection
-    1 mm beside the bar 1.34x with m43338, but the contact area 0.91x (the thesis: wider)."""
+    1 mm beside the bar 1.34x with m43338, but the contact area 0.91x (the thesis: wider), within its
+    resolution (1.5: on 1 mm elements most of each contact area is its outer ring of nodes)."""
     f = by_key(thesis3d.bars_3d(shop))
     depth, local, gradual = f["fig6-25_bar_depth"], f["fig7-4_local"], f["sec7-1-2_gradual"]
     assert depth.verdict == REPRODUCED and depth.checks[0].value == pytest.approx(1.23, abs=0.05)
@@ -24,7 +25,8 @@ def test_bar_in_3d_bends_the_stiff_epidermis_and_stays_local(shop):
     for r in rows.values():
         assert 0.8 < r["section_below_10pct"] < 0.9
     assert gradual.checks[0].value > 1.2 and gradual.checks[0].outcome == REPRODUCED
-    assert gradual.checks[1].value < 1 and gradual.verdict == DIFFERS
+    area = gradual.checks[1]
+    assert area.value < 1 and area.resolution > 1 - area.value and gradual.verdict == UNCERTAIN
 
 
 def test_2d_section_against_3d(shop):
@@ -42,17 +44,19 @@ def test_2d_section_against_3d(shop):
 
 def test_step_across_the_pad(shop):
     """Measured: the smallest contact 0.65 mm from the middle of the convex-half datums (within its
-    quarter wavelength), the largest 1.08 mm from the concave half's middle (just outside); area
-    against peak pressure rank correlation -0.54 and opposite moves at 56 % of the steps, not the
-    thesis's 'always'. Receptors 0.75 mm deep at x = -1.5, 0, +1.5 mm: their peak-normalised spatial
+    quarter wavelength), the largest 1.08 mm from the concave half's middle (just outside), both
+    within their resolution (positions 5 and 6 mm away have areas that cannot be told apart on 1 mm
+    elements); area against peak pressure rank correlation -0.54 (resolution 0.71) and opposite
+    moves at 56 % of the steps, not the thesis's 'always'. Receptors 0.75 mm deep at x = -1.5, 0, +1.5 mm: their peak-normalised spatial
     response profiles, aligned on the receptor, differ by up to 65 % of the peak."""
     f = by_key(thesis3d.steps_3d(shop))
     ext = f["fig6-39_step_extremes"]
-    assert ext.checks[0].outcome == REPRODUCED and abs(ext.checks[1].value) > 0.9
+    assert abs(ext.checks[0].value) < 0.9 and abs(ext.checks[1].value) > 0.9
+    assert min(c.resolution for c in ext.checks) > 2 and ext.verdict == UNCERTAIN
     areas = [r["contact_area_mm2"] for r in ext.table]
     assert areas[0] == pytest.approx(areas[-1], rel=0.02)       # the two flats: the same contact
     trend, every = f["fig6-39_step_inverse_trend"], f["fig6-39_step_inverse_every_step"]
-    assert -0.8 < trend.checks[0].value < -0.3 and trend.verdict == DIFFERS
+    assert -0.8 < trend.checks[0].value < -0.3 and trend.verdict == UNCERTAIN
     assert every.verdict == DIFFERS and 40 < every.checks[0].value < 70
     assert trend.series[0].x == [r["contact_area_mm2"] for r in trend.table]   # its own figure: area against pressure
     spatial = f["fig6-38_spatial_response"]

@@ -1,0 +1,84 @@
+"""The contact surface's facets: the area each node carries, the contact pressure recovered from
+nodal forces (facet-averaged: P2 node-to-surface contact loads midside nodes about twice as much as
+vertices), and which nodes neighbour each other (the ring a node-counted contact area steps by).
+
+    facets, shares = fe_facets(model, "volar", model.surface_nodes("volar"))
+    pressure_MPa = smoothed_pressure(force_N, facets, shares)
+    pairs = node_pairs(facets, points_mm)
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+def facet_shares(facets, facet_area, dim) -> np.ndarray:
+    """(k, n_per_facet) share of each facet's area given to each of its nodes.
+
+    facets: (k, n) node indices (vertices first, then midside nodes); facet_area: (k,) mm^2 (mm
+    in 2D). P2 shares as `fem.core.model.Model.surface_nodes` (the facet cut into its linear
+    sub-facets): 3D 1/12 per vertex and 1/4 per edge node, 2D 1/4 and 1/2; P1: equal shares.
+    """
+    n = facets.shape[1]
+    if n == dim:
+        w = np.full(n, 1.0 / n)
+    else:
+        w = np.array([1 / 12] * 3 + [1 / 4] * 3) if dim == 3 else np.array([1 / 4, 1 / 4, 1 / 2])
+    return np.outer(facet_area, w)
+
+
+def smoothed_pressure(force_N, facets, shares) -> np.ndarray:
+    """(m,) contact pressure [MPa] recovered from nodal forces (m,) on facets (k, n) with area
+    shares (k, n): each node's force is spread over its facets in proportion to their shares,
+    giving a mean pressure per facet; a node's pressure is the share-weighted mean of its facets.
+    Exact for uniform pressure whatever the split of force between vertex and midside nodes
+    (node-to-surface contact on P2 loads midside nodes about twice as much as vertices)."""
+    area = np.bincount(facets.ravel(), shares.ravel(), minlength=len(force_N))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        per_area = np.where(area > 0, force_N / area, 0.0)
+    p_facet = (per_area[facets] * shares).sum(axis=1) / shares.sum(axis=1)
+    num = np.bincount(facets.ravel(), (shares * p_facet[:, None]).ravel(), minlength=len(force_N))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(area > 0, num / area, 0.0)
+
+
+def fe_facets(model, region: str, sn) -> tuple[np.ndarray, np.ndarray]:
+    """((k, n) candidate-local node indices, (k, n) area shares) of the facets of `region` of a
+    `fem.core.model.Model`, whose candidate nodes are `sn` (`Model.surface_nodes(region)`): the
+    `facets` argument of ContactModel."""
+    mesh, fids = model.mesh, model.region_facets(region)
+    fv = mesh.facets[:, fids]
+    mids = mesh.f2e[:, fids] if model.dim == 3 else fids[None]
+    facets = np.searchsorted(sn.nodes, np.vstack([fv, mids + mesh.nvertices]).T)
+    x = mesh.p[:, fv]
+    if model.dim == 3:
+        size = 0.5 * np.linalg.norm(np.cross((x[:, 1] - x[:, 0]).T, (x[:, 2] - x[:, 0]).T), axis=1)
+    else:
+        size = np.linalg.norm(x[:, 1] - x[:, 0], axis=0)
+    return facets, facet_shares(facets, size, model.dim)
+
+
+def node_pairs(facets, points_mm) -> np.ndarray:
+    """(p, 2) node pairs (indices into points_mm (m, dim)) that share an edge of a linear sub-facet
+    of the facets (k, n): P2, a vertex with the midside nodes of its edges and the midside nodes of
+    one facet with each other (a 3D facet's midside nodes matched to their edges by position); P1,
+    the facet's vertices. Each pair once, sorted."""
+    facets = np.asarray(facets)
+    k, n = facets.shape
+    dim = np.asarray(points_mm).shape[1]
+    if n == dim:                                               # P1: the vertices pairwise
+        pairs = np.vstack([facets[:, [i, j]] for i in range(n) for j in range(i + 1, n)])
+    elif dim == 2:                                             # (v0, v1, m): v0-m, m-v1
+        pairs = np.vstack([facets[:, [0, 2]], facets[:, [2, 1]]])
+    else:                                                      # (v0, v1, v2, three midside nodes)
+        x = np.asarray(points_mm, float)[facets]
+        edges = np.array([(0, 1), (1, 2), (0, 2)])
+        mid = 0.5 * (x[:, edges[:, 0]] + x[:, edges[:, 1]])                          # (k, 3, 3)
+        on = np.argmin(np.linalg.norm(x[:, 3:, None] - mid[:, None], axis=-1), axis=2)  # (k, 3): edge of each
+        rows = np.arange(k)
+        pairs = [facets[:, [3 + j, 3 + (j + 1) % 3]] for j in range(3)]             # the midside ring
+        for j in range(3):
+            a, b = edges[on[:, j]].T
+            pairs += [np.column_stack([facets[rows, a], facets[:, 3 + j]]),
+                      np.column_stack([facets[rows, b], facets[:, 3 + j]])]
+        pairs = np.vstack(pairs)
+    return np.unique(np.sort(pairs, axis=1), axis=0)
