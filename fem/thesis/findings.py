@@ -7,7 +7,8 @@ A finding's verdict and reason are computed from its checks, never stored: a che
 "reproduced" when its number lies inside the band the thesis's words give, "differs" when it lies
 outside, and "within mesh uncertainty" when the band's edge is nearer than the number's mesh
 uncertainty: Roache's grid convergence index of the finer of the two mesh levels the claim ran on,
-SAFETY_FACTOR |fine - coarse| / (r^ORDER - 1) with r the levels' refinement ratio. The claims themselves are in
+SAFETY_FACTOR |fine - coarse| / (r^ORDER - 1) with r the levels' refinement ratio, and never below
+the resolution of a measure counted on nodes. The claims themselves are in
 fem.thesis.chapter4_* (chapter 4 and the appendices: plane-strain models) and
 fem.thesis.chapters5_7 (the 3D presets and their sections); fem.thesis.claims lists them.
 Units: mm, N (N/mm on the 2D models), MPa.
@@ -60,10 +61,10 @@ class Check:
     limit and tol; coarse: the same number on the coarser mesh level (None where the claim ran on
     one level only); factor: the multiple of |value - coarse| taken as its mesh uncertainty
     (`uncertainty_factor` of the two levels, set by `with_coarse`); resolution: the smallest change
-    the measure can show on the finer mesh (a node-counted contact area or width: its edge nodes'
-    area, `fem.contact.linear.ContactModel.edge_area_mm2`; a position sampled in steps: half the
-    step), the floor of the uncertainty; why: where the band comes from, when the thesis gives no
-    number."""
+    the measure can show on the finer mesh (a node-counted contact area or width: the area of its
+    outer ring of nodes, `fem.contact.linear.ContactModel.edge_area_mm2`; a quantity made of such
+    measures: the most their resolutions move it), the floor of the uncertainty; why: where the
+    band comes from, when the thesis gives no number."""
     what: str
     value: float
     test: str
