@@ -1,11 +1,12 @@
 #!/usr/bin/env python
-"""The shipped ramp-and-hold (scenes/ramp_hold.toml: a 2 mm flat probe pressed 1 mm into the pad in
-0.1 s, held 0.5 s, released in 0.1 s) on the 3D monkey preset, elastic and with viscoelastic
-layers ([viscoelastic] g, Pawluk and Howe's relaxation times): how much the contact force relaxes
-during the hold against the closed form of a flat punch on a block (its elastic force linear in
-the depth, so a linear ramp: F(t) / F_e(t_r) = g_inf + sum g_i tau_i / t_r (e^-(t - t_r)/tau_i -
-e^-t/tau_i)), and how the SA1 and RA hold rates fall with it. Prints the table, appends it to
-benchmarks/results/viscoelastic_ramp_hold.md and draws docs/img/viscoelastic_ramp_hold.png.
+"""The shipped ramp-and-hold (scenes/ramp_hold.toml: a 2 mm flat probe pressed 1 mm into the pad in 0.1
+s, held 0.5 s, released in 0.1 s) on the 3D monkey preset, elastic and with viscoelastic layers
+([viscoelastic] g, Pawluk and Howe's relaxation times): how much the contact force relaxes during
+the hold against the closed form of a flat punch on a block (its elastic force linear in the depth,
+so a linear ramp: F(t) / F_e(t_r) = g_inf + sum g_i tau_i / t_r (e^-(t - t_r)/tau_i - e^-t/tau_i),
+`fem.verify.closed_forms.prony_ramp_hold`), and how the SA1 and RA hold rates fall with it. Prints
+the table, appends it to benchmarks/results/viscoelastic_ramp_hold.md and draws
+docs/img/viscoelastic_ramp_hold.png.
 
     python benchmarks/viscoelastic_ramp_hold.py                    # g = 0.2 0.2 0.2, monkey at 1 mm
     python benchmarks/viscoelastic_ramp_hold.py --g 0.3 0.2 0.1 --size 0.7
@@ -27,19 +28,12 @@ from fem.core.viscoelastic import PAWLUK_HOWE_TAU_S, Prony  # noqa: E402
 from fem.experiments.runner import run_scene  # noqa: E402
 from fem.experiments.scene import load_scene  # noqa: E402
 from fem.geometry.build import MeshSpec, build_folder  # noqa: E402
+from fem.verify.closed_forms import prony_ramp_hold  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results" / "viscoelastic_ramp_hold.md"
 FIGURE = ROOT / "docs" / "img" / "viscoelastic_ramp_hold.png"
 SETTLE_S = 0.1
 """The hold's first 0.1 s (the on-transient of RA, the fast SA1 decay) is left out of its rates."""
-
-
-def block_relaxation(law: Prony, ramp_s: float, t_s) -> np.ndarray:
-    """F(t) / F_e(ramp_s) after a linear ramp of the elastic force over ramp_s [s] (a flat punch on
-    a block: force proportional to depth), at times t_s >= ramp_s: (1 / t_r) int_0^t_r g(t - s) ds."""
-    t = np.asarray(t_s, float)[..., None]
-    g, tau = np.asarray(law.g), np.asarray(law.tau_s)
-    return law.g_inf + (g * tau / ramp_s * (np.exp(-(t - ramp_s) / tau) - np.exp(-t / tau))).sum(axis=-1)
 
 
 def course(run) -> tuple[np.ndarray, np.ndarray]:
@@ -48,17 +42,9 @@ def course(run) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(e.experiment.times_s, float), np.array([r.total_force_N for _, r in e.steps])
 
 
-def hold_firing(run, t0_s: float, t1_s: float) -> np.ndarray:
-    """(n,) bool: the afferents of a scene run that fire between t0_s and t1_s."""
-    return next(iter(run.afferents[1].values())).rates_hz(t0_s, t1_s) > 0
-
-
-def hold_rates(run, chosen, t0_s: float, t1_s: float) -> dict:
-    """{class: mean rate [Hz] between t0_s and t1_s over the `chosen` (n,) afferents of that class}."""
-    pop, responses = run.afferents
-    rates = next(iter(responses.values())).rates_hz(t0_s, t1_s)
-    return {c: float(rates[chosen & (pop.afferent_class == c)].mean()) if np.any(chosen & (pop.afferent_class == c))
-            else 0.0 for c in np.unique(pop.afferent_class)}
+def hold_rates(run, t0_s: float, t1_s: float) -> np.ndarray:
+    """(n,) mean firing rate [Hz] of each afferent of a scene run between t0_s and t1_s."""
+    return next(iter(run.afferents[1].values())).rates_hz(t0_s, t1_s)
 
 
 def main():
@@ -85,35 +71,36 @@ def main():
     t_r, t_h = trace.ramp_s, trace.ramp_s + trace.hold_s
     hold = (t >= t_r - 1e-12) & (t <= t_h + 1e-12)
     peak_e = float(np.interp(t_r, t, fe))
-    closed = block_relaxation(law, t_r, t[hold])
+    closed = prony_ramp_hold(t[hold], t_r, law.g_inf, law.g, law.tau_s)
     # the elastic force is constant in the hold: the relaxation is fv / fe there
     relax = fv[hold] / fe[hold]
     end_fe, end_closed = float(relax[-1]), float(closed[-1])
     worst = float(np.max(np.abs(relax - closed) / closed))
-    chosen = hold_firing(runs["elastic"], t_r + SETTLE_S, t_h)             # the same afferents in both runs
-    rates = {name: hold_rates(run, chosen, t_r + SETTLE_S, t_h) for name, run in runs.items()}
+    rates = {name: hold_rates(run, t_r + SETTLE_S, t_h) for name, run in runs.items()}
+    chosen = rates["elastic"] > 0                  # those firing in the elastic hold, the same in both runs
+    ramp_end = float(relax[-1] / relax[0]), float(closed[-1] / closed[0])
 
     lines = [f"## g = {list(args.g)}, tau_s = {list(law.tau_s)}, monkey preset at {args.size:g} mm "
              f"({runs['elastic'].model.ndof} DOFs)", "",
              "| quantity | FE (monkey) | closed form (block) | difference |", "|---|---|---|---|",
-             f"| force at the end of the hold / at the end of the ramp | {end_fe:.4f} | {end_closed:.4f} | "
-             f"{100 * (end_fe / end_closed - 1):+.2f} % |",
-             f"| force at the end of the hold / viscoelastic force at the end of the ramp | "
-             f"{float(relax[-1] / relax[0]):.4f} | {float(closed[-1] / closed[0]):.4f} | "
-             f"{100 * (float(relax[-1] / relax[0]) / float(closed[-1] / closed[0]) - 1):+.2f} % |",
+             f"| force at the end of the hold / elastic force at the end of the ramp | {end_fe:.4f} | "
+             f"{end_closed:.4f} | {100 * (end_fe / end_closed - 1):+.2f} % |",
+             f"| force at the end of the hold / viscoelastic force at the end of the ramp | {ramp_end[0]:.4f} | "
+             f"{ramp_end[1]:.4f} | {100 * (ramp_end[0] / ramp_end[1] - 1):+.2f} % |",
              f"| largest difference over the hold | | | {100 * worst:.2f} % |",
              f"| elastic force at the end of the ramp | {peak_e * 1e3:.2f} mN | | |", ""]
     lines += ["| class (firing in the hold / placed) | elastic hold rate Hz | viscoelastic hold rate Hz | change |",
               "|---|---|---|---|"]
     classes = runs["elastic"].afferents[0].afferent_class
-    for c in rates["elastic"]:
-        e, v = rates["elastic"][c], rates["viscoelastic"][c]
+    for c in np.unique(classes):
+        mine = chosen & (classes == c)
+        e, v = (float(rates[name][mine].mean()) if mine.any() else 0.0 for name in runs)
         change = f"{100 * (v / e - 1):+.1f} %" if e else "no firing in the hold"
-        lines.append(f"| {c} ({int(np.sum(chosen & (classes == c)))} / {int(np.sum(classes == c))}) | {e:.1f} | "
-                     f"{v:.1f} | {change} |")
+        lines.append(f"| {c} ({int(mine.sum())} / {int(np.sum(classes == c))}) | {e:.1f} | {v:.1f} | {change} |")
     lines += ["", f"Hold rates: mean from {t_r + SETTLE_S:g} to {t_h:g} s over the afferents of a class that fire "
-              f"then in the elastic run ({int(chosen.sum())} of {len(chosen)}; the same afferents in both runs). Run time: elastic {seconds['elastic']:.1f} s, viscoelastic "
-              f"{seconds['viscoelastic']:.1f} s (mesh from the cache).", ""]
+              f"then in the elastic run ({int(chosen.sum())} of {len(chosen)}; the same afferents in both runs). "
+              f"Run time: elastic {seconds['elastic']:.1f} s, viscoelastic {seconds['viscoelastic']:.1f} s (mesh "
+              f"from the cache).", ""]
     text = "\n".join(lines)
     print(text)
     if args.no_write:
@@ -133,7 +120,8 @@ def figure(t, fe, fv, peak_e, law, t_r, t_h, runs, chosen):
     a.plot(t, 1e3 * fe, label="elastic")
     a.plot(t, 1e3 * fv, label="viscoelastic layers")
     th = np.linspace(t_r, t_h, 200)
-    a.plot(th, 1e3 * peak_e * block_relaxation(law, t_r, th), "k:", label="closed form, flat punch on a block")
+    a.plot(th, 1e3 * peak_e * prony_ramp_hold(th, t_r, law.g_inf, law.g, law.tau_s), "k:",
+           label="closed form, flat punch on a block")
     a.set_xlabel("time [s]")
     a.set_ylabel("contact force [mN]")
     a.legend(loc="lower center", fontsize=8)

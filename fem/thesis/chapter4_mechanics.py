@@ -293,8 +293,8 @@ def _contact_findings(runs: CylinderRuns, kappa) -> list[Finding]:
     R = runs.results
     fluid, held10 = R[("solid-fluid", "F*/10")], R[("solid, bone held", "F*/10")]
     drop = {"relative": lambda w: float(100 * (1 - w[0] / w[-1])), "absolute": lambda w: float(w[-1] - w[0])}
-    fall = {(name, r is fluid): (fn(r["width_mm"]), _resolution(fn, r["width_mm"], r["width_resolution_mm"]))
-            for name, fn in drop.items() for r in (held10, fluid)}
+    fall = {(name, model): (fn(r["width_mm"]), _resolution(fn, r["width_mm"], r["width_resolution_mm"]))
+            for name, fn in drop.items() for model, r in (("solid", held10), ("fluid", fluid))}
     gap = fluid["width_mm"] - held10["width_mm"]
     i = int(np.argmin(gap))
     units = {"relative": "%", "absolute": "mm"}
@@ -313,11 +313,11 @@ def _contact_findings(runs: CylinderRuns, kappa) -> list[Finding]:
                resolution=float(fluid["width_resolution_mm"][i] + held10["width_resolution_mm"][i])),
          Check("smallest solid over solid-fluid peak pressure, C1-C8 at F*/10",
                float(np.min(held10["max_pressure_MPa"] / fluid["max_pressure_MPa"])), ">", 1.0),
-         Check(f"fall of the contact width from C8 to C1, solid model (F*/10, {name})", fall[(name, False)][0], ">",
-               0.0, units[name], resolution=fall[(name, False)][1]),
+         Check(f"fall of the contact width from C8 to C1, solid model (F*/10, {name})", fall[(name, "solid")][0], ">",
+               0.0, units[name], resolution=fall[(name, "solid")][1]),
          Check(f"fall of the contact width from C8 to C1, solid-fluid minus solid model (F*/10, {name})",
-               fall[(name, True)][0] - fall[(name, False)][0], ">", 0.0, units[name],
-               resolution=fall[(name, True)][1] + fall[(name, False)][1])],
+               fall[(name, "fluid")][0] - fall[(name, "solid")][0], ">", 0.0, units[name],
+               resolution=fall[(name, "fluid")][1] + fall[(name, "solid")][1])],
         width_note, "cylinder curvature 1/R [1/mm]", "contact width [mm]", widths, [], logx=True,
         reading=f"'the reduction was more rapid' {how}")
         for name, how in (("relative", "as a fall relative to the C8 width"), ("absolute", "as a fall in mm"))]

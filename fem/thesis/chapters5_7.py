@@ -549,7 +549,8 @@ def steps_3d(shop: Workshop) -> list[Finding]:
         "contact area [mm^2]", "peak pressure [kPa]", scatter, rows, reading=how)
         for name, check, how in (
             ("trend", Check("rank correlation of contact area with peak pressure over the positions", rho, "<", -0.8,
-                            resolution=rho_resolution, why="an inverse trend"), "'always accompanied by a decrease' as an inverse trend"),
+                            resolution=rho_resolution, why="an inverse trend"),
+             "'always accompanied by a decrease' as an inverse trend"),
             ("every_step", Check("moves between neighbouring positions where area and peak pressure change in "
                                  "opposite senses", opposite, ">", 99.9, "%", why="all of them"),
              "'always accompanied by a decrease ... and vice-versa' at every move of the step"))]

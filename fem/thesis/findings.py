@@ -80,7 +80,7 @@ class Check:
         if self.test not in TESTS:
             raise ValueError(f"Check.test must be one of {', '.join(TESTS)}, not {self.test!r}")
         self.value, self.limit, self.tol = float(self.value), float(self.limit), float(self.tol)
-        self.resolution = float(self.resolution)
+        self.factor, self.resolution = float(self.factor), float(self.resolution)
 
     @property
     def margin(self) -> float:
@@ -213,8 +213,8 @@ def with_coarse(fine: list[Finding], coarse: list[Finding], factor: float = 1.0)
         other = by_key.get(f.key)
         if other is None or [c.what for c in other.checks] != [c.what for c in f.checks]:
             raise ValueError(f"finding {f.key}: the coarse level's checks do not match the fine level's")
-        out.append(replace(f, checks=[replace(c, coarse=o.value, factor=float(factor))
-                                      for c, o in zip(f.checks, other.checks)]))
+        checks = [replace(c, coarse=o.value, factor=factor) for c, o in zip(f.checks, other.checks)]
+        out.append(replace(f, checks=checks))
     return out
 
 

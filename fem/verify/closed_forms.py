@@ -286,9 +286,19 @@ def sls_creep(t_s, g_inf, tau_s):
 def sls_ramp_hold(t_s, ramp_s, g_inf, tau_s):
     """Stress of a standard linear solid under a strain ramped linearly from 0 at t = 0 to 1 at
     ramp_s and held, over the instantaneous modulus: (1 / ramp_s) int_0^min(t, ramp_s) g(t - s) ds."""
+    return prony_ramp_hold(t_s, ramp_s, g_inf, [1.0 - g_inf], [tau_s])
+
+
+def prony_ramp_hold(t_s, ramp_s, g_inf, g, tau_s):
+    """The same for a Prony series g(t) = g_inf + sum_i g_i exp(-t / tau_i) (g, tau_s: (N,)):
+    (g_inf min(t, t_r) + sum_i g_i tau_i (e^-(t - min(t, t_r))/tau_i - e^-t/tau_i)) / t_r. Also
+    the force of a flat punch on a block, whose elastic force is proportional to its depth, over
+    its elastic force at the end of the ramp."""
     t = np.asarray(t_s, float)
-    u = np.minimum(t, ramp_s)
-    return (g_inf * u + (1.0 - g_inf) * tau_s * (np.exp(-(t - u) / tau_s) - np.exp(-t / tau_s))) / ramp_s
+    u = np.minimum(t, ramp_s)[..., None]
+    g, tau = np.asarray(g, float), np.asarray(tau_s, float)
+    terms = (g * tau * (np.exp(-(t[..., None] - u) / tau) - np.exp(-t[..., None] / tau))).sum(axis=-1)
+    return (g_inf * u[..., 0] + terms) / ramp_s
 
 
 # --------------------------------------------------------------------------- flat punch (Sneddon 1946)

@@ -47,8 +47,9 @@ def test_step_across_the_pad(shop):
     quarter wavelength), the largest 1.08 mm from the concave half's middle (just outside), both
     within their resolution (positions 5 and 6 mm away have areas that cannot be told apart on 1 mm
     elements); area against peak pressure rank correlation -0.54 (resolution 0.71) and opposite
-    moves at 56 % of the steps, not the thesis's 'always'. Receptors 0.75 mm deep at x = -1.5, 0, +1.5 mm: their peak-normalised spatial
-    response profiles, aligned on the receptor, differ by up to 65 % of the peak."""
+    moves at 56 % of the steps, not the thesis's 'always'. Receptors 0.75 mm deep at x = -1.5, 0,
+    +1.5 mm: their peak-normalised spatial response profiles, aligned on the receptor, differ by up
+    to 65 % of the peak."""
     f = by_key(thesis3d.steps_3d(shop))
     ext = f["fig6-39_step_extremes"]
     assert abs(ext.checks[0].value) < 0.9 and abs(ext.checks[1].value) > 0.9
