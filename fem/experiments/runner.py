@@ -27,6 +27,8 @@ from fem.core.fields import centroid_jacobians
 from fem.core.materials import FLUID_LAYER
 from fem.experiments.response import ResponseStore, contact_model, stored_responses
 from fem.experiments.scene import AXES, Experiment, Receptors, Scene, line_text
+from fem.experiments.spiking import scene_responses
+from fem.experiments.traces import frequency_warning
 from fem.experiments.viscoelastic import elastic_indentations, relaxed_steps
 from fem.io.modelfolder import (
     CONDENSE_MAX_NODES,
@@ -39,7 +41,6 @@ from fem.io.modelfolder import (
     receptor_surface,
 )
 from fem.io.runfolder import writes_pvd
-from fem.receptors.afferents import scene_responses
 from fem.receptors.grid import ReceptorSampler, receptor_grid
 from fingertip.errors import InputError
 from fingertip.progress import as_progress
@@ -293,16 +294,18 @@ def validity_warning(run: ExperimentRun) -> str | None:
 
 
 def _plan(model, info, scene: Scene):
-    """(contact region's SurfaceNodes, [ExperimentRun without steps], placement warnings,
-    (P,) bool candidates the scene can reach, receptor line, receptor grid) of a scene."""
+    """(contact region's SurfaceNodes, [ExperimentRun without steps], warnings (placement, sines
+    above the quasi-static limit), (P,) bool candidates the scene can reach, receptor line,
+    receptor grid) of a scene."""
     scene.check_dim(model.dim)
     scene.check_count()
     sn = model.surface_nodes(CONTACT_REGION[model.dim])
     runs, warnings, touched = [], [], np.zeros(len(sn.nodes), bool)
     for exp in scene.experiments:
         place, warning = placement(exp, model, info, sn)
-        if warning:
-            warnings.append(warning)
+        for w in (warning, frequency_warning(exp.trace)):
+            if w:
+                warnings.append(w if w is warning else f"experiment '{exp.name}': {w}")
         ind = make_indentor(exp.indentor, **place)
         tissue = tissue_limit_mm(model, sn, ind.approach)
         exp = within_tissue(exp, tissue)

@@ -49,6 +49,7 @@ from fem.core.materials import DEFAULT_CODE, DEFAULT_NU, Material
 from fem.core.measures import check_names
 from fem.core.viscoelastic import PAWLUK_HOWE_TAU_S, Prony
 from fem.experiments.traces import check, fractions
+from fem.io.nwb import check_available
 from fem.receptors.grid import DEFAULT_DEPTHS_MM, DEFAULT_MEASURES
 from fem.receptors.transduction import class_data
 from fingertip.declare import declared, finite, nonnegative, positive
@@ -348,8 +349,9 @@ class Trace:
     hold_s: float = _key("s", _number, 0.5, "hold time (ramp_hold, steps: per level)")
     release_s: float = _key("s", _number, 0.1, "release time (ramp_hold)")
     rest_s: float = _key("s", _number, 0.0, "time at rest after the release (ramp_hold)")
-    frequency_hz: float = _key("Hz", _number, 0.0, "sine frequency (at most fem.experiments.traces.QUASI_STATIC_HZ)")
+    frequency_hz: float = _key("Hz", _number, 0.0, "sine frequency (at most fem.experiments.traces.MAX_FREQUENCY_HZ)")
     cycles: float = _key("", _number, 1.0, "sine periods")
+    offset: float = _key("", _number, 0.0, "fraction held under the sine from t = 0 (a pre-indentation; sine)")
     levels: tuple = _key("", _values, tuple, "fractions of the depth (steps, table)")
     times_s: tuple = _key("s", _values, tuple, "sample times of the levels (table)")
     speed_mm_s: float = _key("mm/s", _number, 0.0, "speed along the sweep (scan)")
@@ -374,6 +376,8 @@ class Afferents:
     gain: float = _key("", _number, 1.0, "factor on the input (the published parameters are fit to stress in MPa)")
     noisy: bool = _key("", _boolean, True, "membrane noise of the published model (seeded)")
     seed: int = _key("", _count, 0, "seed of the placement and the noise")
+    nwb: bool = _key("", _boolean, False, "also write <experiment>/spikes.nwb (Neurodata Without Borders; "
+                                          "the nwb extra, fem.io.nwb)")
 
     @classmethod
     def from_dict(cls, table) -> Afferents:
@@ -391,6 +395,8 @@ class Afferents:
             _finite(kw["radius_mm"], "radius_mm", "[afferents]", 0.0, strict=True)
         if "gain" in kw:
             _finite(kw["gain"], "gain", "[afferents]", 0.0, strict=True)
+        if kw.get("nwb"):
+            check_available()
         return cls(**kw)
 
 

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from fem.core.measures import base_measure
+from fem.io.nwb import write_nwb
 from fem.io.vtu import vtu_mesh, write_mesh
 from fingertip.errors import InputError
 from fingertip.progress import as_progress
@@ -99,18 +100,23 @@ def run_record(model_dir, scene_run) -> dict:
             "experiments": [experiment_record(e) for e in scene_run.experiments]}
 
 
-def afferents_record(population, responses) -> dict | None:
-    """run.json entry of a scene's afferents (fem.receptors.afferents): counts per class and the files of
-    each traced experiment; None without afferents."""
+def afferents_record(population, responses, nwb: bool = False) -> dict | None:
+    """run.json entry of a scene's afferents (fem.experiments.spiking): counts per class, the files of
+    each traced experiment (with NWB_FILE when nwb) and the loads its 5 kHz inputs were tabulated
+    at (null: read from the samples, a scan); None without afferents."""
     if population is None:
         return None
     names, counts = np.unique(population.afferent_class.astype(str), return_counts=True)
+    files = AFFERENT_FILES + ((NWB_FILE,) if nwb else ())
     return {"counts": {str(k): int(c) for k, c in zip(names, counts)},
-            "experiments": {name: [f"{name}/{f}" for f in AFFERENT_FILES] for name in responses}}
+            "experiments": {name: [f"{name}/{f}" for f in files] for name in responses},
+            "table_loads": {name: r.table_loads for name, r in responses.items()}}
 
 
 AFFERENT_FILES = ("afferents.csv", "spikes.csv", "inputs.csv")
 """Files of a traced experiment's afferents, in the folder <experiment name>/ (`write_afferents`)."""
+NWB_FILE = "spikes.nwb"
+"""The NWB file of a traced experiment's afferents when the scene asks for it (fem.io.nwb)."""
 
 def afferent_tables(resp) -> dict:
     """{"afferents", "spikes", "inputs": {column: values}} of a fem.receptors.afferents.PopulationResponse:
@@ -172,11 +178,14 @@ def write_run(folder, model_dir, scene_run, afferents=(None, {}), progress=None)
         write_csv(folder / f"{run.name}_receptors.csv", tables["receptors"])
         if run.name in responses:
             tables["afferents"] = write_afferents(folder / run.name, responses[run.name])
+            if scene_run.scene.afferents.nwb:
+                write_nwb(folder / run.name / NWB_FILE, run.name, responses[run.name],
+                          tables["steps"]["depth_mm"], tables["steps"]["force_N"])
         if writes_pvd(out, len(run.steps)):
             _write_pvd(folder, run, scene_run, progress)
     record = run_record(model_dir, scene_run)
     if population is not None:
-        record["afferents"] = afferents_record(population, responses)
+        record["afferents"] = afferents_record(population, responses, scene_run.scene.afferents.nwb)
     write_json(folder / "run.json", record)
     return written
 

@@ -14,10 +14,13 @@ traced experiment (`fem.experiments.traces`) each afferent receives
   finger's kinematics, not its moduli, set this input;
 and `fem.receptors.transduction` turns both into spike trains.
 
-    pop = place(model, surface, ("SA1", "RA"), seed=0)
+    pop = place(model, surface, ("SA1", "RA", "PC"), seed=0)
     static, deflection = experiment_inputs(sampler_of(model, pop), pop, contact, run)   # (n, k) per step
     resp = respond(pop, run.experiment.times_s, static, deflection)
     resp.spikes, resp.rates_hz(0.1, 0.6)
+
+A scene's afferents (`fem.experiments.spiking.scene_responses`) take their 5 kHz inputs from a
+LoadTable of the experiment's load instead of from the samples linear in time.
 """
 from __future__ import annotations
 
@@ -30,6 +33,7 @@ from fem.receptors.grid import ReceptorGrid, ReceptorSampler
 from fem.receptors.transduction import (
     class_data,
     dynamic_input,
+    lif_times,
     rates_hz,
     resample,
     skin_E_star_MPa,
@@ -101,14 +105,14 @@ def sampler_of(model, population: Population):
                                                population.site_mm))
 
 
-def site_inputs(sampler, population: Population, compliance, results, measure: str = "stress") -> np.ndarray:
-    """(n, k) static input at each afferent (`sampler_of`) for each of k contact results
-    (fem.contact.linear.ContactResult) with the compliance's approach: 'stress' -n.sigma.n [MPa]
-    (compression positive) or 'sed' [MPa]. The displacement fields come from one solve with k
-    right-hand sides on the compliance's factors."""
-    values = sampler.operator @ compliance.displacement(np.stack([r.force_N for r in results], axis=1))
-    out = np.empty((len(population), len(results)))
-    for j in range(len(results)):
+def site_inputs(sampler, population: Population, compliance, forces_N, measure: str = "stress") -> np.ndarray:
+    """(n, k) static input at each afferent (`sampler_of`) for k nodal contact force vectors
+    forces_N (m, k) [N] along the compliance's approach: 'stress' -n.sigma.n [MPa] (compression
+    positive) or 'sed' [MPa]. The displacement fields come from one solve with k right-hand sides
+    on the compliance's factors."""
+    values = sampler.operator @ compliance.displacement(np.asarray(forces_N, float).reshape(len(forces_N), -1))
+    out = np.empty((len(population), values.shape[1]))
+    for j in range(values.shape[1]):
         if measure == "sed":
             out[:, j] = sampler.measures(values[:, j], ["sed_MPa"])["sed_MPa"]
         else:
@@ -123,21 +127,47 @@ def experiment_inputs(sampler, population: Population, contact, run, measure: st
     distinct contact result once (a hold repeats one), and the surface deflection above each afferent."""
     unique = list({id(r): r for _, r in run.steps}.values())
     column = {id(r): j for j, r in enumerate(unique)}
-    static = site_inputs(sampler, population, contact.compliance(run.indentor.approach), unique, measure)
+    static = site_inputs(sampler, population, contact.compliance(run.indentor.approach),
+                         np.stack([r.force_N for r in unique], axis=1), measure)
     deflection = np.stack([r.deflection_mm[population.candidate] for _, r in run.steps], axis=1)
     return static[:, [column[id(r)] for _, r in run.steps]], deflection
+
+
+@dataclass(frozen=True)
+class LoadTable:
+    """Afferent inputs of an elastic indentation that depends on its load alone (no sweep), at
+    increasing loads: load (m,) depth [mm] or force [N], static (n, m) [MPa], deflection_mm (n, m)
+    of the surface above each afferent. Linear contact does not depend on the path, so a course
+    of that load at any times has the inputs `at` its loads (`fem.experiments.spiking.tabulate`
+    chooses the loads)."""
+    load: np.ndarray
+    static: np.ndarray
+    deflection_mm: np.ndarray
+
+    def at(self, load) -> tuple[np.ndarray, np.ndarray]:
+        """(static (n, T), deflection_mm (n, T)) at loads (T,), linear between the table's (held
+        beyond its ends)."""
+        x = np.clip(np.asarray(load, float), self.load[0], self.load[-1])
+        if len(self.load) == 1:
+            return np.repeat(self.static, x.size, axis=1), np.repeat(self.deflection_mm, x.size, axis=1)
+        k = np.clip(np.searchsorted(self.load, x, side="right") - 1, 0, len(self.load) - 2)
+        w = (x - self.load[k]) / (self.load[k + 1] - self.load[k])
+        return ((1.0 - w) * self.static[:, k] + w * self.static[:, k + 1],
+                (1.0 - w) * self.deflection_mm[:, k] + w * self.deflection_mm[:, k + 1])
 
 
 @dataclass
 class PopulationResponse:
     """Spike trains of a population through a time course: times_s (k,) sample times, static
     (n, k) input [MPa], deflection_mm (n, k) of the surface above each afferent, spikes: n arrays
-    of spike times [s]."""
+    of spike times [s]; table_loads: the loads of the LoadTable the 5 kHz inputs were read from
+    (None: the samples, linear in time)."""
     population: Population
     times_s: np.ndarray
     static: np.ndarray
     deflection_mm: np.ndarray
     spikes: list
+    table_loads: int | None = None
 
     @property
     def duration_s(self) -> float:
@@ -149,39 +179,31 @@ class PopulationResponse:
 
 
 def respond(population: Population, times_s, static, deflection_mm, gain: float = 1.0, noisy: bool = True,
-            seed: int = 0, E_star_MPa: float | None = None) -> PopulationResponse:
-    """Spike trains of the population from its inputs at the sample times (k,): static (n, k)
-    [MPa, times gain] and the surface deflection above each afferent (n, k) [mm], sampled at the
-    transduction's 5 kHz (linear in between: quasi-static mechanics). E_star_MPa: the dynamic
-    input's modulus (default the published model's, `fem.receptors.transduction.skin_E_star_MPa`)."""
+            seed: int = 0, E_star_MPa: float | None = None, fine=None, law=None) -> PopulationResponse:
+    """Spike trains of the population through a course sampled at times_s (k,): static (n, k)
+    [MPa, times gain] and the surface deflection above each afferent (n, k) [mm].
+
+    The transduction runs at 5 kHz (`fem.receptors.transduction.LIF_RATE_HZ`) on inputs there:
+    fine = (static (n, T), deflection_mm (n, T)) at times arange(T) / 5000 s, T = floor(duration
+    x 5000) (e.g. a LoadTable `at` the course's loads), or, without it, the samples linear in
+    time in between. The dynamic input is E* (E_star_MPa, default the published model's
+    `fem.receptors.transduction.skin_E_star_MPa`) times the deflection's velocity at 5 kHz by
+    central differences, as the published model computes it from its 5 kHz stimulus.
+    law: a `fem.core.viscoelastic.Prony` whose hereditary integral relaxes the (elastic) static
+    input at 5 kHz; the response's static (n, k) is then the relaxed input at the sample times."""
     t = np.asarray(times_s, float)
     static, deflection_mm = np.asarray(static, float), np.asarray(deflection_mm, float)
-    dyn = dynamic_input(t, deflection_mm, population.depth_mm, skin_E_star_MPa() if E_star_MPa is None else E_star_MPa)
-    _, s5 = resample(t, gain * static)
-    _, d5 = resample(t, dyn)
-    spikes = spike_trains(population.afferent_class, population.model_index, s5, d5, noisy=noisy, seed=seed)
+    if fine is None:
+        t5, s5 = resample(t, static)
+        _, w5 = resample(t, deflection_mm)
+    else:
+        t5 = lif_times(t[-1])
+        s5, w5 = (np.asarray(v, float) for v in fine)
+        if s5.shape != w5.shape or s5.shape[-1] != t5.size:
+            raise InputError(f"fine inputs {s5.shape}, {w5.shape} must have one column per 5 kHz sample ({t5.size})")
+    if law is not None:
+        s5 = law.relax(t5, s5.T).T
+        static = np.stack([np.interp(t, t5, row) for row in s5]) if len(s5) else static
+    dyn = dynamic_input(t5, w5, population.depth_mm, skin_E_star_MPa() if E_star_MPa is None else E_star_MPa)
+    spikes = spike_trains(population.afferent_class, population.model_index, gain * s5, dyn, noisy=noisy, seed=seed)
     return PopulationResponse(population, t, static, deflection_mm, spikes)
-
-
-def scene_responses(scene_run) -> tuple[Population | None, dict]:
-    """(the population, {experiment name: PopulationResponse}) of a fem.experiments.runner.SceneRun
-    whose scene has [afferents]: every traced experiment drives the same population (placed
-    once); each distinct indentation is observed once. (None, {}) without [afferents]."""
-    cfg = scene_run.scene.afferents
-    if cfg is None:
-        return None, {}
-    model = scene_run.model
-    first = next(r for r in scene_run.experiments if r.experiment.times_s is not None)
-    points = scene_run.contact.points_mm
-    centre = points[np.argmin(first.indentor.standoff(points))]        # where the first traced stimulus touches
-    pop = place(model, scene_run.surface, cfg.classes, dict(cfg.density_per_cm2 or ()), centre, cfg.radius_mm,
-                cfg.seed)
-    sampler = sampler_of(model, pop)
-    out = {}
-    for run in scene_run.experiments:
-        times = run.experiment.times_s
-        if times is None:
-            continue
-        static, deflection = experiment_inputs(sampler, pop, scene_run.contact, run, cfg.input)
-        out[run.name] = respond(pop, times, static, deflection, cfg.gain, cfg.noisy, cfg.seed)
-    return pop, out

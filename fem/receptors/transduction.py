@@ -114,6 +114,15 @@ def _samples(values, m, name) -> np.ndarray:
     return v
 
 
+def lif_times(duration_s) -> np.ndarray:
+    """(T,) times [s] of the transduction's samples over a course: arange(T) / 5000, T =
+    floor(duration_s x 5000)."""
+    duration = float(duration_s)
+    if not math.isfinite(duration) or duration <= 0:
+        raise InputError(f"duration_s must be a positive number of seconds, got {duration_s}")
+    return np.arange(math.floor(duration * LIF_RATE_HZ + 1e-9)) / LIF_RATE_HZ  # 1e-9: 0.7 * 5000 is 3500
+
+
 def resample(t_s, values, duration_s=None):
     """Piecewise-linear input at the LIF rate from mechanical samples.
 
@@ -124,11 +133,8 @@ def resample(t_s, values, duration_s=None):
     """
     t = _time_axis(t_s)
     v = _samples(values, t.size, "values")
-    duration = t[-1] if duration_s is None else float(duration_s)
-    if not math.isfinite(duration) or duration <= 0:
-        raise InputError(f"duration_s must be a positive number of seconds, got {duration_s}")
-    T = math.floor(duration * LIF_RATE_HZ + 1e-9)      # 1e-9: 0.7 * 5000 is 3500, not 3499
-    times = np.arange(T) / LIF_RATE_HZ
+    times = lif_times(t[-1] if duration_s is None else duration_s)
+    T = times.size
     v2 = np.atleast_2d(v)
     if t.size == 1:
         out = np.repeat(v2, T, axis=1)

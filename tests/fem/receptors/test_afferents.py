@@ -9,7 +9,7 @@ import pytest
 import pipeline
 from fem.experiments.runner import run_experiments
 from fem.experiments.scene import Scene, load_scene
-from fem.experiments.traces import fractions
+from fem.experiments.traces import course, fractions, frequency_warning
 from fem.io.modelfolder import read_model
 from fem.receptors.afferents import Population, experiment_inputs, respond, sampler_of
 from fingertip.errors import InputError
@@ -113,8 +113,10 @@ def test_sa1_resolve_grating_bars_that_ra_blur(monkey_line):
 
 
 def test_trace_shapes_and_refusals():
-    """Ramp-and-hold corners are samples; a sine above the quasi-static limit, afferents without a
-    trace and a trace with several depths are one-line errors."""
+    """Ramp-and-hold corners are samples; the closed-form course equals the samples; an offset sine
+    starts at its offset; a sine above MAX_FREQUENCY_HZ or with an offset of 1, afferents without a
+    trace and a trace with several depths are one-line errors; above the quasi-static limit a sine
+    runs with a warning."""
     scene = Scene.from_dict({"experiment": [{"indentor": "punch:2", "depth_mm": 1.0,
                                              "trace": {"shape": "ramp_hold", "samples": 8}}]})
     exp = scene.experiments[0]
@@ -124,7 +126,17 @@ def test_trace_shapes_and_refusals():
     sine = dataclasses.replace(exp.trace, shape="sine", frequency_hz=10, cycles=2, samples=40)
     ts, fs = fractions(sine)
     assert ts[-1] == pytest.approx(0.2) and fs.max() == pytest.approx(1, abs=0.01)
-    bad = [{"experiment": [{"indentor": "punch:2", "depth_mm": 1.0, "trace": {"shape": "sine", "frequency_hz": 200}}]},
+    for trace in (exp.trace, sine):
+        t, f = fractions(trace)
+        assert np.array_equal(course(trace, t), f)
+    offset = dataclasses.replace(sine, offset=0.25)
+    assert course(offset, [0.0, 0.05, 0.1]) == pytest.approx([0.25, 1.0, 0.25])
+    assert frequency_warning(sine) is None and "quasi-static" in frequency_warning(
+        dataclasses.replace(sine, frequency_hz=250))
+    sine_at = lambda **kw: {"experiment": [{"indentor": "punch:2", "depth_mm": 1.0,  # noqa: E731
+                                            "trace": {"shape": "sine", "samples": 80, **kw}}]}
+    Scene.from_dict(sine_at(frequency_hz=250))
+    bad = [sine_at(frequency_hz=2000), sine_at(frequency_hz=10, offset=1.0),
            {"experiment": [{"indentor": "punch:2", "depth_mm": 1.0}], "afferents": {}},
            {"experiment": [{"indentor": "punch:2", "depth_mm": [0.5, 1.0], "trace": {}}]},
            {"experiment": [{"indentor": "punch:2", "depth_mm": 1.0, "trace": {"shape": "wobble"}}]},
