@@ -65,7 +65,7 @@ def main():
         u = comp.displacement(r.force_N)
         stress = sampler.state(sampler.operator @ u).stress
         static[:, j] = -np.einsum("ni,nij,nj->n", pop.normal, stress, pop.normal)
-    deflection = np.stack([r.deflection_mm[pop.candidate] for _, r in e.steps], axis=1)
+    deflection = np.stack([pop.at_sites(r.deflection_mm) for _, r in e.steps], axis=1)
     peer = respond(pop, resp.times_s, static, deflection, noisy=True, seed=0)
     t5 = time.perf_counter()
     same = all(np.array_equal(a, b) for a, b in zip(peer.spikes, resp.spikes))

@@ -191,6 +191,17 @@ def _densities(value, key, where):
     return tuple((str(k), float(v)) for k, v in value.items())
 
 
+def _points(value, key, where):
+    """A list of points [[x, y, z], ...] in mm."""
+    ok = (isinstance(value, (list, tuple)) and value
+          and all(isinstance(v, (list, tuple)) and len(v) == 3
+                  and all(isinstance(c, (int, float)) and not isinstance(c, bool) and np.isfinite(c) for c in v)
+                  for v in value))
+    if not ok:
+        raise _bad(key, where, "a list of points [[x, y, z], ...] in mm", value)
+    return tuple(tuple(float(c) for c in v) for v in value)
+
+
 def _names(value, key, where):
     if not isinstance(value, (list, tuple)) or not all(isinstance(v, str) for v in value):
         raise _bad(key, where, "a list of names", value)
@@ -376,6 +387,8 @@ class Afferents:
     gain: float = _key("", _number, 1.0, "factor on the input (the published parameters are fit to stress in MPa)")
     noisy: bool = _key("", _boolean, True, "membrane noise of the published model (seeded)")
     seed: int = _key("", _count, 0, "seed of the placement and the noise")
+    sites_mm: tuple | None = _key("mm", _points, None, "one afferent of each class at each of these points "
+                                                       "(projected onto the pad) instead of by density")
     nwb: bool = _key("", _boolean, False, "also write <experiment>/spikes.nwb (Neurodata Without Borders; "
                                           "the nwb extra, fem.io.nwb)")
 
@@ -397,6 +410,8 @@ class Afferents:
             _finite(kw["gain"], "gain", "[afferents]", 0.0, strict=True)
         if kw.get("nwb"):
             check_available()
+        if "sites_mm" in kw and ("density_per_cm2" in kw or "radius_mm" in kw):
+            raise InputError("[afferents] sites_mm places the afferents itself: drop density_per_cm2 and radius_mm")
         return cls(**kw)
 
 

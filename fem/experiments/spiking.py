@@ -65,7 +65,7 @@ def tabulate(sampler, population: Population, contact, run, measure: str = "stre
 
     def inputs(results):
         forces = np.stack([r.force_N if r.elastic_force_N is None else r.elastic_force_N for r in results], axis=1)
-        deflection = np.stack([r.deflection_mm[pop.candidate] for r in results], axis=1)
+        deflection = np.stack([pop.at_sites(r.deflection_mm) for r in results], axis=1)
         return site_inputs(sampler, pop, comp, forces, measure), deflection
 
     first = {}                        # a load reached twice (ramp and release) differs in its last bits
@@ -108,7 +108,7 @@ def fine_loads(exp, law=None) -> np.ndarray:
 def scene_responses(scene_run) -> tuple[Population | None, dict]:
     """(the population, {experiment name: PopulationResponse}) of a fem.experiments.runner.SceneRun
     whose scene has [afferents]: every traced experiment drives the same population (placed
-    once, around where the first traced experiment touches). (None, {}) without [afferents]."""
+    once: at the scene's sites_mm, or by density around where the first traced experiment touches). (None, {}) without [afferents]."""
     cfg = scene_run.scene.afferents
     if cfg is None:
         return None, {}
@@ -117,7 +117,7 @@ def scene_responses(scene_run) -> tuple[Population | None, dict]:
     points = scene_run.contact.points_mm
     centre = points[np.argmin(first.indentor.standoff(points))]
     pop = place(model, scene_run.surface, cfg.classes, dict(cfg.density_per_cm2 or ()), centre, cfg.radius_mm,
-                cfg.seed)
+                cfg.seed, cfg.sites_mm)
     sampler = sampler_of(model, pop)
     out = {}
     for run in scene_run.experiments:

@@ -1,9 +1,9 @@
 """Afferent populations over the pad of a 3D finger, driven by its finite-element mechanics.
 
-Afferents of each class sit below randomly drawn pad nodes (area-weighted, at the class's density
-per cm^2 and depth, `fem.receptors.transduction`), so their surface sites are mesh nodes: positions are
-resolved to the mesh's node spacing (about 0.5 mm on a 1 mm mesh). At every sample time of a
-traced experiment (`fem.experiments.traces`) each afferent receives
+Afferents of each class sit below sites drawn uniformly over the pad's surface (at the class's
+density per cm^2 and depth, `fem.receptors.transduction`), or below given points; a site lies
+anywhere on a surface facet, its values interpolated from the facet's nodes. At every sample
+time of a traced experiment (`fem.experiments.traces`) each afferent receives
 - the static input: the normal stress across the plane parallel to the skin at its site,
   -n.sigma.n with n the surface normal above it (compression positive; in MPa), the quantity the
   published model takes from Sneddon's half-space solution, or optionally the strain energy
@@ -28,7 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fem.io.modelfolder import pad_nodes
+from fem.contact.facets import fe_facets
+from fem.io.modelfolder import CONTACT_REGION, pad_nodes
 from fem.receptors.grid import ReceptorGrid, ReceptorSampler
 from fem.receptors.transduction import (
     class_data,
@@ -42,17 +43,25 @@ from fem.receptors.transduction import (
 from fingertip.errors import InputError
 
 
+MAX_SITE_DISTANCE_MM = 1.0
+"""An explicit afferent site may lie at most this far from the pad surface it is projected onto."""
+
+
 @dataclass(frozen=True)
 class Population:
     """n afferents: afferent_class (n,) names, model_index (n,) row of the class's parameter table,
-    candidate (n,) index of the contact candidate (fem.core.model.SurfaceNodes row) above each,
-    site_mm (n, 3) that node, normal (n, 3) its outward unit normal, depth_mm (n,)."""
+    site_mm (n, 3) the point of the skin surface above each, normal (n, 3) the outward unit normal
+    there, depth_mm (n,) below it; candidate (n, c) the contact candidates
+    (fem.core.model.SurfaceNodes rows) whose values weights (n, c) interpolate to the site (the
+    quadratic shape functions of its surface facet), or candidate (n,) with weights None: the site
+    is that candidate's node."""
     afferent_class: np.ndarray
     model_index: np.ndarray
     candidate: np.ndarray
     site_mm: np.ndarray
     normal: np.ndarray
     depth_mm: np.ndarray
+    weights: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.depth_mm)
@@ -62,40 +71,100 @@ class Population:
         """(n, 3) afferent positions: depth_mm below the site along the inward normal."""
         return self.site_mm - self.depth_mm[:, None] * self.normal
 
+    def at_sites(self, values) -> np.ndarray:
+        """(n, ...) a field given at the contact candidates (m, ...) (e.g. the surface deflection)
+        at the afferents' sites."""
+        v = np.asarray(values)[self.candidate]
+        return v if self.weights is None else np.einsum("nc,nc...->n...", self.weights, v)
+
+
+def pad_facets(model, surface, centre_mm=None, radius_mm=None) -> tuple[np.ndarray, np.ndarray]:
+    """(facets (k, 6) candidate indices: the vertices, then the midside nodes of edges 01, 12 and
+    20; area_mm2 (k,)) of the pad's surface facets (every vertex a `pad_nodes` node; with radius_mm,
+    centroid within radius_mm of centre_mm (3,))."""
+    facets, shares = fe_facets(model, CONTACT_REGION[3], surface)
+    x = surface.x
+    if facets.shape[1] == 6:          # midside nodes in the order of the edges, matched by position
+        mid = 0.5 * (x[facets[:, [0, 1, 2]]] + x[facets[:, [1, 2, 0]]])                 # (k, 3, 3)
+        gap = np.linalg.norm(mid[:, :, None] - x[facets[:, 3:]][:, None], axis=-1)      # (k, edge, node)
+        facets = np.c_[facets[:, :3], np.take_along_axis(facets[:, 3:], gap.argmin(axis=2), axis=1)]
+    ok = pad_nodes(model, surface)[facets[:, :3]].all(axis=1)
+    if radius_mm is not None:
+        ok &= np.linalg.norm(x[facets[:, :3]].mean(axis=1) - np.asarray(centre_mm, float), axis=1) <= radius_mm
+    return facets[ok], shares[ok].sum(axis=1)
+
+
+def _shape(lam, nodes: int) -> np.ndarray:
+    """(n, nodes) shape functions of a linear (3) or quadratic (6) triangle at barycentric lam (n, 3)."""
+    if nodes == 3:
+        return lam
+    l0, l1, l2 = lam.T
+    return np.c_[lam * (2 * lam - 1), 4 * l0 * l1, 4 * l1 * l2, 4 * l2 * l0]
+
+
+def _sites(surface, facets, face, lam) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(candidate (n, c), weights (n, c), site_mm (n, 3), normal (n, 3)) of points at barycentric
+    lam (n, 3) on the facets face (n,): the point on the flat facet, the vertex normals
+    interpolated and normalised."""
+    verts = facets[face, :3]
+    site = np.einsum("ni,nij->nj", lam, surface.x[verts])
+    normal = np.einsum("ni,nij->nj", lam, surface.normal[verts])
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    return facets[face], _shape(lam, facets.shape[1]), site, normal
+
 
 def place(model, surface, classes=("SA1", "RA"), density_per_cm2=None, centre_mm=None, radius_mm=None,
-          seed: int = 0) -> Population:
-    """A population over the pad of a 3D model: for each class, round(density x pad area) distinct
-    pad nodes drawn with probability proportional to their tributary area (seeded), each given
-    one of the class's published models at random. surface: the contact region's
-    fem.core.model.SurfaceNodes; density_per_cm2: {class: density} overriding the fingertip densities;
-    centre_mm (3,), radius_mm: only the pad within radius_mm of centre_mm."""
+          seed: int = 0, sites_mm=None) -> Population:
+    """A population over the pad of a 3D model. surface: the contact region's
+    fem.core.model.SurfaceNodes. By density: for each class, round(density x pad area) sites drawn
+    uniformly over the pad's surface (a facet with probability proportional to its area, a uniform
+    point on it; seeded); density_per_cm2 {class: density} overrides the published fingertip
+    densities; centre_mm (3,), radius_mm: only the pad within radius_mm of centre_mm. Or at
+    sites_mm (k, 3): one afferent of each class at each point, projected onto the pad (at most
+    MAX_SITE_DISTANCE_MM away). Each afferent gets one of its class's published models at random."""
     if model.dim != 3:
         raise InputError("afferents lie over a pad: they need a 3D model (a 2D section has no pad area)")
     rng = np.random.default_rng(seed)
-    ok = pad_nodes(model, surface)
-    if radius_mm is not None:
-        ok &= np.linalg.norm(surface.x - np.asarray(centre_mm, float), axis=1) <= radius_mm
-    nodes = np.flatnonzero(ok)
-    area_cm2 = float(surface.area[nodes].sum()) / 100.0
-    if not nodes.size or area_cm2 <= 0:
+    facets, area = pad_facets(model, surface, centre_mm, None if sites_mm is not None else radius_mm)
+    if not len(facets):
         raise InputError(f"no pad surface within {radius_mm} mm of {np.round(centre_mm, 2).tolist()} mm: "
                          f"widen radius_mm")
-    dens = dict(density_per_cm2 or {})
-    parts = []
-    for name in classes:
-        data = class_data(name)
-        count = round(dens.get(name, data.density_per_cm2) * area_cm2)
-        if count > nodes.size:
-            raise InputError(f"{count} {name} afferents ({dens.get(name, data.density_per_cm2):g}/cm^2 over "
-                             f"{area_cm2:.2f} cm^2) exceed the {nodes.size} pad nodes: lower the density or "
-                             f"mesh finer")
-        picked = rng.choice(nodes, size=count, replace=False, p=surface.area[nodes] / surface.area[nodes].sum())
-        parts.append((np.full(count, name), rng.integers(len(data.parameters), size=count), np.sort(picked),
-                      np.full(count, data.depth_mm)))
-    cls, idx, cand, depth = (np.concatenate([p[k] for p in parts]) for k in range(4))
-    return Population(cls.astype(object), idx.astype(int), cand.astype(int), surface.x[cand], surface.normal[cand],
-                      depth.astype(float))
+    if sites_mm is not None:
+        face, lam = _projected(surface, facets, np.asarray(sites_mm, float).reshape(-1, 3))
+        names = np.repeat(np.asarray(classes, dtype=object), len(face))
+        face, lam = np.tile(face, len(classes)), np.tile(lam, (len(classes), 1))
+    else:
+        dens, area_cm2 = dict(density_per_cm2 or {}), float(area.sum()) / 100.0
+        counts = [round(dens.get(name, class_data(name).density_per_cm2) * area_cm2) for name in classes]
+        names = np.repeat(np.asarray(classes, dtype=object), counts)
+        face = rng.choice(len(facets), size=len(names), p=area / area.sum())
+        r = np.sqrt(rng.random(len(names)))
+        u = rng.random(len(names))
+        lam = np.c_[1 - r, r * (1 - u), r * u]
+    model_index = np.array([rng.integers(len(class_data(name).parameters)) for name in names], int)
+    depth = np.array([class_data(name).depth_mm for name in names], float)
+    cand, weights, site, normal = _sites(surface, facets, face, lam)
+    return Population(names, model_index, cand, site, normal, depth, weights)
+
+
+def _projected(surface, facets, points) -> tuple[np.ndarray, np.ndarray]:
+    """(face (k,), barycentric (k, 3)) of the points of the pad's flat facets closest to points (k, 3)."""
+    from trimesh.triangles import closest_point, points_to_barycentric
+
+    tri = surface.x[facets[:, :3]]                                   # (f, 3, 3)
+    face, closest = np.empty(len(points), int), np.empty((len(points), 3))
+    for i, p in enumerate(points):                                   # every facet against each point
+        c = closest_point(tri, np.broadcast_to(p, (len(tri), 3)))
+        face[i] = np.argmin(np.linalg.norm(c - p, axis=1))
+        closest[i] = c[face[i]]
+    distance = np.linalg.norm(closest - points, axis=1)
+    far = np.flatnonzero(distance > MAX_SITE_DISTANCE_MM)
+    if far.size:
+        raise InputError(f"afferent site {np.round(points[far[0]], 3).tolist()} mm is {distance[far[0]]:.2f} mm from "
+                         f"the pad surface (at most {MAX_SITE_DISTANCE_MM:g} mm): give points on the pad (the "
+                         f"run's <experiment>_surface.csv lists its nodes)")
+    lam = np.clip(points_to_barycentric(tri[face], closest), 0.0, 1.0)
+    return face, lam / lam.sum(axis=1, keepdims=True)
 
 
 def sampler_of(model, population: Population):
@@ -129,7 +198,7 @@ def experiment_inputs(sampler, population: Population, contact, run, measure: st
     column = {id(r): j for j, r in enumerate(unique)}
     static = site_inputs(sampler, population, contact.compliance(run.indentor.approach),
                          np.stack([r.force_N for r in unique], axis=1), measure)
-    deflection = np.stack([r.deflection_mm[population.candidate] for _, r in run.steps], axis=1)
+    deflection = np.stack([population.at_sites(r.deflection_mm) for _, r in run.steps], axis=1)
     return static[:, [column[id(r)] for _, r in run.steps]], deflection
 
 

@@ -71,7 +71,7 @@ def test_tabulated_inputs_within_tolerance_of_direct_solves(sphere_run):
     direct = [run.contact.indent(e.indentor, depth_mm=d) for d in depths]
     static = site_inputs(sampler, pop, run.contact.compliance(e.indentor.approach),
                          np.stack([r.force_N for r in direct], axis=1))
-    deflection = np.stack([r.deflection_mm[pop.candidate] for r in direct], axis=1)
+    deflection = np.stack([pop.at_sites(r.deflection_mm) for r in direct], axis=1)
     s_tab, w_tab = table.at(depths)
     assert np.abs(s_tab - static).max() <= 2 * TABLE_TOLERANCE * np.abs(table.static).max()
     assert np.abs(w_tab - deflection).max() <= 2 * TABLE_TOLERANCE * np.abs(table.deflection_mm).max()
