@@ -6,38 +6,42 @@ and on TouchSim's half-space (E = 0.05 MPa, nu = 0.4: Sneddon's flat punch, stre
 deflection in closed form; tests/fem/verify/test_sneddon.py checks the solver against it). Both carry 0.119 N
 in the hold. Afferents on the line across the pad through the point the probe touches first:
 an SA1 (0.3 mm deep) and an RA (1.6 mm) below every pad node within 0.3 mm of it, model 0 of each
-class, noise off.
+class, noise off; the flat skin's afferents at the same distances from the probe's centre, and on
+its own line every 0.01 mm (the published model's profile, not its sampling at the finger's nodes).
+Every course runs as a scene's does (`fem.experiments.spiking`: inputs tabulated over the depth,
+read at the course's depth at 5 kHz).
 
-    python benchmarks/afferents_flat_vs_finger.py [--work out/afferents_bench] [--figure docs/img/afferents_flat_vs_finger.png]
+    python benchmarks/afferents_flat_vs_finger.py [--work out/afferents_bench] [--no-write]
 
-Prints, per class, the peak static input and the half-peak width of its profile across the line,
-the span of the afferents that fire, and the surface deflection 3 mm from the probe, flat against
-finger; draws the profiles. Result (1 mm human preset, 141,633 DOFs, about 40 s):
-  flat   SA1 peak 28.2 kPa, half-peak width 1.96 mm, hold spikes under the probe (|x| <= 1 mm), 24 Hz
-  finger SA1 peak 47.9 kPa, width 1.63 mm, hold spikes from -1.6 to +0.3 mm, 38 Hz
-  flat   RA peak 13.0 kPa, width 2.55 mm, ramp spikes under the probe, 33 Hz
-  finger RA peak 9.7 kPa, width 2.64 mm, ramp spikes from -1.6 to +0.7 mm, 33 Hz
-  surface deflection 3 mm from the probe: flat 0.216 mm, finger 0.264 and 0.142 mm
+Prints, per class, the peak static input in the hold (and where), the half-peak width of its
+profile across the line, the span of the afferents that fire (SA1 in the hold, RA in the ramp)
+and their peak rate, and the surface deflection 3 mm either side of the probe; writes the table
+to benchmarks/results/afferents_flat_vs_finger.md and draws docs/img/afferents_flat_vs_finger.png.
 """
 from __future__ import annotations
 
 import argparse
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from fem.experiments.runner import run_experiments
-from fem.experiments.scene import load_scene
-from fem.io.modelfolder import read_model
-from fem.receptors.afferents import Population, experiment_inputs, respond, sampler_of
-from fem.thesis.findings import Workshop
-from fem.verify.closed_forms import sneddon_punch_force_N, sneddon_punch_stress_zz_MPa
+from fem.experiments.runner import run_experiments  # noqa: E402
+from fem.experiments.scene import load_scene  # noqa: E402
+from fem.experiments.spiking import fine_loads, load_value, tabulate  # noqa: E402
+from fem.io.modelfolder import read_model  # noqa: E402
+from fem.receptors.afferents import LoadTable, Population, respond, sampler_of  # noqa: E402
+from fem.thesis.findings import Workshop  # noqa: E402
+from fem.verify.closed_forms import sneddon_punch_force_N, sneddon_punch_stress_zz_MPa  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "benchmarks" / "results" / "afferents_flat_vs_finger.md"
+FIGURE = ROOT / "docs" / "img" / "afferents_flat_vs_finger.png"
 E_MPA, NU, RADIUS_MM, DEPTHS = 0.05, 0.4, 1.0, {"SA1": 0.3, "RA": 1.6}
+DENSE_STEP_MM = 0.01
 
 
 def half_width(x, y) -> float:
@@ -46,11 +50,47 @@ def half_width(x, y) -> float:
     return float(on.max() - on.min())
 
 
+def line_population(k: int, candidate, site, normal) -> Population:
+    """An SA1 and an RA (model 0) below each of k sites."""
+    both = np.r_[candidate, candidate]
+    return Population(np.array(["SA1"] * k + ["RA"] * k, dtype=object), np.zeros(2 * k, int), both,
+                      np.r_[site, site], np.r_[normal, normal], np.r_[np.full(k, DEPTHS["SA1"]), np.full(k, DEPTHS["RA"])])
+
+
+def flat_response(x, exp):
+    """The half-space's afferents at signed distances x (k,) from the probe's centre through the course of exp."""
+    k = len(x)
+    pop = line_population(k, np.zeros(k, int), np.c_[x, 0 * x, 0 * x], np.tile([0.0, 0.0, 1.0], (k, 1)))
+    r = np.abs(pop.site_mm[:, 0])
+    full = load_value(exp.loads[0])
+    stress = sneddon_punch_stress_zz_MPa(r, pop.depth_mm, RADIUS_MM, sneddon_punch_force_N(RADIUS_MM, full, E_MPA, NU))
+    w = full * np.where(r <= RADIUS_MM, 1.0, 2 / np.pi * np.arcsin(RADIUS_MM / np.maximum(r, RADIUS_MM)))
+    table = LoadTable(np.array([0.0, full]), np.c_[0 * stress, stress], np.c_[0 * w, w])
+    samples = table.at([load_value(load) for _, load in exp.indentations])
+    return respond(pop, exp.times_s, *samples, noisy=False, fine=table.at(fine_loads(exp)))
+
+
+def summary(x, resp, hold: int) -> dict:
+    """Per class: peak input [kPa] and its x, half-peak width, firing span and peak rate."""
+    k = len(x)
+    out = {}
+    for c, sl, window in (("SA1", slice(0, k), (0.15, 0.6)), ("RA", slice(k, 2 * k), (0.0, 0.12))):
+        s, rate = resp.static[sl, hold], resp.rates_hz(*window)[sl]
+        fired = rate > 0
+        out[c] = {"peak_kPa": 1e3 * s.max(), "at_mm": float(x[np.argmax(s)]), "width_mm": half_width(x, s),
+                  "span": f"{x[fired].min():+.2f} to {x[fired].max():+.2f} mm" if fired.any() else "none",
+                  "rate_hz": rate.max()}
+    d = resp.deflection_mm[:k, hold]
+    out["deflection_mm"] = (float(np.interp(-3, x, d)), float(np.interp(3, x, d)))
+    return out
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--work", default="out/afferents_bench", help="folder for the meshed preset (cached)")
-    ap.add_argument("--figure", default=str(ROOT / "docs" / "img" / "afferents_flat_vs_finger.png"))
+    ap.add_argument("--no-write", action="store_true", help="print only (no results file, no figure)")
     args = ap.parse_args()
+    t0 = time.perf_counter()
     scene = load_scene(ROOT / "scenes" / "ramp_hold.toml")
     model, info = read_model(Workshop(args.work, quick=True).preset("human"), scene.material, scene.nu)
     run = run_experiments(model, info, scene)
@@ -60,60 +100,57 @@ def main():
     line = np.flatnonzero((np.abs(sn.x[:, 2] - touch[2]) < 0.3) & (np.abs(sn.x[:, 0] - touch[0]) < 6.0)
                           & (sn.normal[:, 1] > 0.5))
     line = line[np.argsort(sn.x[line, 0])]
-    k, both = len(line), np.r_[line, line]
-    pop = Population(np.array(["SA1"] * k + ["RA"] * k, dtype=object), np.zeros(2 * k, int), both, sn.x[both],
-                     sn.normal[both], np.r_[np.full(k, DEPTHS["SA1"]), np.full(k, DEPTHS["RA"])])
-    static, deflection = experiment_inputs(sampler_of(model, pop), pop, run.contact, e)
-    t = e.experiment.times_s
-    finger = respond(pop, t, static, deflection, noisy=False)
-
-    # the published mechanics on the same line: distance from the probe's centre, same times
-    frac = np.array([float(r.depth_mm.max()) for _, r in e.steps])          # depth course, 0 -> 1 mm
+    k = len(line)
+    pop = line_population(k, line, sn.x[line], sn.normal[line])
+    table = tabulate(sampler_of(model, pop), pop, run.contact, e)
+    exp = e.experiment
+    samples = table.at([load_value(load) for _, load in exp.indentations])
+    finger = respond(pop, exp.times_s, *samples, noisy=False, fine=table.at(fine_loads(exp)))
     x = sn.x[line, 0] - touch[0]
-    r = np.r_[np.abs(x), np.abs(x)]
-    P = sneddon_punch_force_N(RADIUS_MM, 1.0, E_MPA, NU)
-    s_flat = sneddon_punch_stress_zz_MPa(r, pop.depth_mm, RADIUS_MM, P)[:, None] * frac
-    w = np.where(r <= RADIUS_MM, 1.0, 2 / np.pi * np.arcsin(RADIUS_MM / np.maximum(r, RADIUS_MM)))
-    flat = respond(pop, t, s_flat, w[:, None] * frac, noisy=False)
+    dense = np.arange(-6.0, 6.0 + DENSE_STEP_MM / 2, DENSE_STEP_MM)
+    flat_nodes, flat_line = flat_response(x, exp), flat_response(dense, exp)
 
-    hold = int(np.argmin(np.abs(t - 0.35)))
+    hold = int(np.argmin(np.abs(exp.times_s - 0.35)))
     force = e.steps[hold][1].total_force_N
-    print(f"hold force: finger {force:.4f} N, flat {P:.4f} N; {k} SA1 and {k} RA on the line (x from "
-          f"{x.min():+.1f} to {x.max():+.1f} mm)")
-    rates = {}
-    for name, resp in (("flat", flat), ("finger", finger)):
-        rates[name] = (resp.rates_hz(0.15, 0.6), resp.rates_hz(0.0, 0.12))
-        for c, sl in (("SA1", slice(0, k)), ("RA", slice(k, 2 * k))):
-            s = resp.static[sl, hold]
-            fired = (rates[name][0] if c == "SA1" else rates[name][1])[sl] > 0
-            span = f"{x[fired].min():+.1f} to {x[fired].max():+.1f} mm" if fired.any() else "none"
-            print(f"  {name:6s} {c}: peak input {1e3 * s.max():.2f} kPa, half-peak width {half_width(x, s):.2f} mm; "
-                  f"{'hold' if c == 'SA1' else 'ramp'} spikes from {span}, peak rate "
-                  f"{(rates[name][0] if c == 'SA1' else rates[name][1])[sl].max():.0f} Hz")
-
-    for name, resp in (("flat", flat), ("finger", finger)):
-        d = resp.deflection_mm[:k, hold]
-        print(f"  {name:6s} surface deflection in the hold at |x| = 3 mm: "
-              f"{np.interp(-3, x, d):.3f} and {np.interp(3, x, d):.3f} mm (probe 1 mm)")
+    P = float(sneddon_punch_force_N(RADIUS_MM, 1.0, E_MPA, NU))
+    rows = {f"flat, its own line (every {DENSE_STEP_MM:g} mm)": (dense, flat_line),
+            f"flat, at the finger's {k} nodes": (x, flat_nodes), "finger (1 mm human preset)": (x, finger)}
+    stats = {name: summary(xs, resp, hold) for name, (xs, resp) in rows.items()}
+    lines = [f"hold force: finger {force:.4f} N, flat {P:.4f} N; {k} SA1 and {k} RA on the finger's line (x from "
+             f"{x.min():+.1f} to {x.max():+.1f} mm); inputs from load tables of {len(table.load)} depths "
+             f"(finger) and 2 (flat: linear); {time.perf_counter() - t0:.0f} s", "",
+             "| skin | SA1 peak input | SA1 half-peak width | SA1 firing in the hold | SA1 peak hold rate | "
+             "RA peak input | RA firing in the ramp | RA peak ramp rate | deflection at x = -3, +3 mm |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for name, st in stats.items():
+        a, b = st["SA1"], st["RA"]
+        lines.append(f"| {name} | {a['peak_kPa']:.1f} kPa at x = {a['at_mm']:+.2f} mm | {a['width_mm']:.2f} mm | "
+                     f"{a['span']} | {a['rate_hz']:.0f} Hz | {b['peak_kPa']:.1f} kPa | {b['span']} | "
+                     f"{b['rate_hz']:.0f} Hz | {st['deflection_mm'][0]:.3f}, {st['deflection_mm'][1]:.3f} mm |")
+    text = "\n".join(lines)
+    print(text)
+    if args.no_write:
+        return
+    RESULTS.write_text("# The same ramp-and-hold on the published model's flat skin and on the finger\n\n"
+                       "`python benchmarks/afferents_flat_vs_finger.py`\n\n" + text + "\n")
 
     from matplotlib.figure import Figure
     fig = Figure(figsize=(10, 4), layout="constrained")
     ax = fig.subplots(1, 2)
-    for name, resp, style in (("flat (published model)", flat, "--"), ("finger (FE, human preset)", finger, "-")):
-        ax[0].plot(x, 1e3 * resp.static[:k, hold], "g" + style, label=f"SA1 0.3 mm, {name}")
-        ax[0].plot(x, 1e3 * resp.static[k:, hold], "b" + style, label=f"RA 1.6 mm, {name}")
-        key = "flat" if resp is flat else "finger"
-        ax[1].plot(x, rates[key][0][:k], "g" + style, label=f"SA1 hold, {name}")
-        ax[1].plot(x, rates[key][1][k:], "b" + style, label=f"RA ramp, {name}")
+    for (name, (xs, resp)), style in zip(list(rows.items())[::2], ("--", "-")):
+        n = len(xs)
+        ax[0].plot(xs, 1e3 * resp.static[:n, hold], "g" + style, label=f"SA1 0.3 mm, {name}")
+        ax[0].plot(xs, 1e3 * resp.static[n:, hold], "b" + style, label=f"RA 1.6 mm, {name}")
+        ax[1].plot(xs, resp.rates_hz(0.15, 0.6)[:n], "g" + style, label=f"SA1 hold, {name}")
+        ax[1].plot(xs, resp.rates_hz(0.0, 0.12)[n:], "b" + style, label=f"RA ramp, {name}")
     ax[0].set(xlabel="x from the probe's centre, mm", ylabel="static input (normal stress), kPa",
-              title="input in the hold, 0.119 N")
+              title=f"input in the hold, {P:.3f} N")
     ax[1].set(xlabel="x from the probe's centre, mm", ylabel="mean rate, Hz", title="rates (model 0, no noise)")
     for a in ax:
         a.legend(fontsize="x-small")
         a.axvspan(-RADIUS_MM, RADIUS_MM, color="0.9")
-    Path(args.figure).parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(args.figure, dpi=90)
-    print(f"figure: {args.figure}")
+    fig.savefig(FIGURE, dpi=90)
+    print(f"results: {RESULTS}; figure: {FIGURE}")
 
 
 if __name__ == "__main__":
