@@ -13,7 +13,9 @@ the depth) and read at the course's depth at 5 kHz, as a scene's afferents are
 8 samples per period linearly in between instead (the project before the load tables).
 
 Prints, per stimulus and class, the total spike count of TouchSim and of the project and their
-difference, and writes the table to benchmarks/results/touchsim_compare.md.
+difference, and how many afferents fire as many spikes as under TouchSim fed the project's course
+written out at 5 kHz (its `stim_sine` runs at f N / (N - 1) over its N samples); writes the table
+to benchmarks/results/touchsim_compare.md.
 
     pip install numba scikit-image && pip install --no-deps git+https://github.com/hsaal/touchsim
     python benchmarks/touchsim_compare.py [--no-write]
@@ -78,13 +80,20 @@ def project_spikes(pop, freq, pre_mm, amp_mm, pin_mm):
     return tabled.spikes, linear.spikes, len(exp.times_s)
 
 
-def touchsim_spikes(ts, pop, freq, pre_mm, amp_mm, pin_mm):
-    """TouchSim's spikes of the same afferents under its own offset sine."""
-    stim = ts.stim_sine(freq=freq, amp=amp_mm, phase=-90.0, len=DURATION_S, fs=5000.0, ramp_len=0.0,
-                        pin_radius=pin_mm, pre_indent=pre_mm + amp_mm, loc=[0.0, 0.0])
+def touchsim_spikes(ts, pop, freq, pre_mm, amp_mm, pin_mm, own_generator=True):
+    """TouchSim's spikes of the same afferents under its own offset sine (`stim_sine`, whose phase
+    steps 2 pi f len / (N - 1) over its N samples: the frequency f N / (N - 1)), or under the
+    project's course written out at 5 kHz (own_generator False)."""
+    if own_generator:
+        stim = ts.stim_sine(freq=freq, amp=amp_mm, phase=-90.0, len=DURATION_S, fs=5000.0, ramp_len=0.0,
+                            pin_radius=pin_mm, pre_indent=pre_mm + amp_mm, loc=[0.0, 0.0])
+    else:
+        t = np.arange(round(5000 * DURATION_S)) / 5000.0
+        trace = pre_mm + amp_mm * (1 - np.cos(2 * np.pi * freq * t))
+        stim = ts.Stimulus(trace=trace[None], location=np.zeros((1, 2)), fs=5000.0, pin_radius=pin_mm)
     affs = [ts.Afferent(c, idx=int(k), location=np.array([s[:2]]), noisy=False)
             for c, k, s in zip(pop.afferent_class, pop.model_index, pop.site_mm)]
-    return stim, ts.AfferentPopulation(*affs).response(stim).spikes
+    return ts.AfferentPopulation(*affs).response(stim).spikes
 
 
 def _change(n: int, reference: int) -> str:
@@ -104,19 +113,22 @@ def main():
     pop = population()
     cls = pop.afferent_class.astype(str)
     rows = ["| stimulus | class | TouchSim spikes | project (load table) | difference | "
-            "project (samples, linear in time) | difference | samples |", "|---|---|---|---|---|---|---|---|"]
+            "project (samples, linear in time) | difference | samples | TouchSim on the project's course: "
+            "afferents with the same count |", "|---|---|---|---|---|---|---|---|---|"]
     for label, freq, pre, amp, pin in STIMULI:
         t0 = time.perf_counter()
-        stim, theirs = touchsim_spikes(ts, pop, freq, pre, amp, pin)
+        theirs = touchsim_spikes(ts, pop, freq, pre, amp, pin)
         t1 = time.perf_counter()
+        same_course = touchsim_spikes(ts, pop, freq, pre, amp, pin, own_generator=False)
         tabled, linear, samples = project_spikes(pop, freq, pre, amp, pin)
         t2 = time.perf_counter()
         for name in CLASSES:
             sel = np.flatnonzero(cls == name)
             n_ts = sum(len(theirs[i]) for i in sel)
             n_tab, n_lin = (sum(len(s[i]) for i in sel) for s in (tabled, linear))
+            equal = sum(len(same_course[i]) == len(tabled[i]) for i in sel)
             rows.append(f"| {label} | {name} | {n_ts} | {n_tab} | {_change(n_tab, n_ts)} | {n_lin} | "
-                        f"{_change(n_lin, n_ts)} | {samples} |")
+                        f"{_change(n_lin, n_ts)} | {samples} | {equal} of {len(sel)} |")
         print(f"{label}: TouchSim {t1 - t0:.2f} s, project {t2 - t1:.2f} s (both runs of the project)", flush=True)
     table = "\n".join(rows)
     print(table)

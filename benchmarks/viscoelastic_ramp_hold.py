@@ -10,6 +10,7 @@ docs/img/viscoelastic_ramp_hold.png.
 
     python benchmarks/viscoelastic_ramp_hold.py                    # g = 0.2 0.2 0.2, monkey at 1 mm
     python benchmarks/viscoelastic_ramp_hold.py --g 0.3 0.2 0.1 --size 0.7
+    python benchmarks/viscoelastic_ramp_hold.py --density-factor 10      # ten times the afferents
 """
 from __future__ import annotations
 
@@ -28,6 +29,7 @@ from fem.core.viscoelastic import PAWLUK_HOWE_TAU_S, Prony  # noqa: E402
 from fem.experiments.runner import run_scene  # noqa: E402
 from fem.experiments.scene import load_scene  # noqa: E402
 from fem.geometry.build import MeshSpec, build_folder  # noqa: E402
+from fem.receptors.transduction import class_data  # noqa: E402
 from fem.verify.closed_forms import prony_ramp_hold  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results" / "viscoelastic_ramp_hold.md"
@@ -52,6 +54,8 @@ def main():
     ap.add_argument("--g", type=float, nargs="+", default=[0.2, 0.2, 0.2], help="Prony weights of the layers")
     ap.add_argument("--size", type=float, default=1.0, help="volar element size of the monkey mesh (mm)")
     ap.add_argument("--work", type=Path, default=ROOT / "out" / "viscoelastic_bench")
+    ap.add_argument("--density-factor", type=float, default=1.0,
+                    help="afferents per cm^2 times this (1: the published fingertip densities)")
     ap.add_argument("--no-write", action="store_true", help="print only (no results file, no figure)")
     args = ap.parse_args()
 
@@ -59,6 +63,9 @@ def main():
     folder = args.work / f"monkey_{args.size:g}"
     build_folder(folder, MeshSpec(preset="monkey", sizes={"size_mm": args.size}))
     elastic_scene = load_scene("ramp_hold")
+    aff = elastic_scene.afferents
+    elastic_scene = dataclasses.replace(elastic_scene, afferents=dataclasses.replace(aff, density_per_cm2=tuple(
+        (c, args.density_factor * class_data(c).density_per_cm2) for c in aff.classes)))
     trace = elastic_scene.experiments[0].trace
     visco_scene = dataclasses.replace(elastic_scene, viscoelastic=law)
     runs, seconds = {}, {}
@@ -81,7 +88,7 @@ def main():
     ramp_end = float(relax[-1] / relax[0]), float(closed[-1] / closed[0])
 
     lines = [f"## g = {list(args.g)}, tau_s = {list(law.tau_s)}, monkey preset at {args.size:g} mm "
-             f"({runs['elastic'].model.ndof} DOFs)", "",
+             f"({runs['elastic'].model.ndof} DOFs), afferent densities x {args.density_factor:g}", "",
              "| quantity | FE (monkey) | closed form (block) | difference |", "|---|---|---|---|",
              f"| force at the end of the hold / elastic force at the end of the ramp | {end_fe:.4f} | "
              f"{end_closed:.4f} | {100 * (end_fe / end_closed - 1):+.2f} % |",

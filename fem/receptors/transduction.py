@@ -13,9 +13,9 @@ a vectorised numpy/scipy reimplementation (loop over time, vector over afferents
 identical to the original's with noise off (the noise stream differs); the tables live in
 data/touchsim_afferents.json.
 
-Quasi-static note: the project's mechanics is quasi-static, which suits SA1 and RA. PC afferents
-are tuned to 40-400 Hz vibration where the finger's mechanics is not quasi-static; their parameters
-are in the data and run here, but the project drives SA1 and RA only (not enforced here).
+All three classes run here. PC afferents are tuned to 40-400 Hz vibration, where the finger's
+mechanics is not quasi-static; scenes drive them with quasi-static mechanics, as the published
+model does on its half-space (`fem.experiments.traces.frequency_warning`).
 
 Usage (stress and deflection sampled at times t_s, afferent under the deflection at 0.3 mm):
 

@@ -140,7 +140,10 @@ def test_trace_shapes_and_refusals():
            {"experiment": [{"indentor": "punch:2", "depth_mm": 1.0}], "afferents": {}},
            {"experiment": [{"indentor": "punch:2", "depth_mm": [0.5, 1.0], "trace": {}}]},
            {"experiment": [{"indentor": "punch:2", "depth_mm": 1.0, "trace": {"shape": "wobble"}}]},
-           {"experiment": [{"indentor": "punch:2", "depth_mm": 1.0, "trace": {}}], "afferents": {"classes": ["SA2"]}}]
+           {"experiment": [{"indentor": "punch:2", "depth_mm": 1.0, "trace": {}}], "afferents": {"classes": ["SA2"]}},
+           {"experiment": [{"indentor": "punch:2", "depth_mm": 1.0, "trace": {}}],
+            "afferents": {"sites_mm": [[0, 1, 2]], "radius_mm": 3.0}},
+           {"experiment": [{"indentor": "punch:2", "depth_mm": 1.0, "trace": {}}], "afferents": {"sites_mm": [[0, 1]]}}]
     for d in bad:
         with pytest.raises(InputError):
             Scene.from_dict(d)
