@@ -308,6 +308,7 @@ class ContactModel:
         self.tol_mm = tol_mm
         self._pending = []           # (result, compliance) awaiting observations
         self._pairs = None           # node_pairs, built on first use
+        self.preload_mm = None       # (m,) displacement along the approach from other loads (None: 0)
         self.restart()
 
     def restart(self) -> None:
@@ -359,12 +360,16 @@ class ContactModel:
         return first_touch(self.points_mm, indentor)[1]
 
     def solve_travel(self, indentor, travel_mm, warm=None) -> tuple[ContactResult, LCPSolution, np.ndarray]:
-        """Contact at given tip travels (n_parts,) mm. Returns (result, lcp, candidate subset)."""
+        """Contact at given tip travels (n_parts,) mm. Returns (result, lcp, candidate subset).
+        With `preload_mm` (m,) set, the candidates start displaced by it along the approach (loads
+        other than the contact, e.g. a viscoelastic body's history, `fem.experiments.stepping`):
+        it adds to the gaps and to the deflection."""
         travel = np.broadcast_to(np.asarray(travel_mm, float), (indentor.n_parts,))
         comp = self.compliance(indentor.approach)
         s = indentor.part_standoff(self.points_mm) - travel
         part = np.argmin(s, axis=1)
-        gap0 = s[np.arange(len(s)), part]
+        pre = 0.0 if self.preload_mm is None else self.preload_mm
+        gap0 = s[np.arange(len(s)), part] + pre
         sub = np.flatnonzero(np.isfinite(gap0))
         blocked = sub[comp.held[sub] & (gap0[sub] < -self.tol_mm)]
         if blocked.size:
@@ -398,7 +403,7 @@ class ContactModel:
             with np.errstate(divide="ignore", invalid="ignore"):
                 pressure = np.where(f > 0, f / self.areas_mm2, 0.0)
         t0 = self.first_touch_mm(indentor)
-        res = ContactResult(indentor.name, travel - t0, travel.copy(), f, g, w, part, pressure,
+        res = ContactResult(indentor.name, travel - t0, travel.copy(), f, g, w + pre, part, pressure,
                             self.areas_mm2, _kkt(f[sub], g[sub], self.tol_mm))
         res.kkt["iterations"] = lcp.iterations
         res._unseen = unseen if unseen.size else None
@@ -441,6 +446,12 @@ class ContactModel:
         res._source = self
         self._pending.append((res, self.compliance(indentor.approach)))
         return res
+
+    def discard_pending(self) -> None:
+        """Drop the observations finished indentations await (their caller computes its own)."""
+        for res, _ in self._pending:
+            res._source = None
+        self._pending = []
 
     def observe_pending(self) -> None:
         """Observations of every finished indentation not observed yet, in blocks per compliance."""

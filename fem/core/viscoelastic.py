@@ -141,3 +141,78 @@ def hereditary(times_s, values, w_inf: float, w, tau_s) -> np.ndarray:
             h = a[k - 1].reshape(shape) * h + b[k - 1].reshape(shape) * (x[k] - x[k - 1])
         out[k] = w_inf * x[k] + np.tensordot(w, h, axes=1)
     return out
+
+
+@dataclass(frozen=True)
+class LayerLaws:
+    """A relaxation function per layer: `layers` ((layer, Prony or None), ...) for the layers
+    named, `default` (a Prony or None) for the others; None keeps a layer elastic. Layers with
+    different spectra make the body's response more than the elastic one convolved in time: a
+    time course is then stepped (`fem.experiments.stepping`)."""
+    default: Prony | None
+    layers: tuple = ()
+
+    def law(self, layer: int) -> Prony | None:
+        return dict(self.layers).get(int(layer), self.default)
+
+    def groups(self, layer_ids) -> list[tuple[Prony | None, tuple]]:
+        """[(law, layers)] of the given layer ids, one entry per distinct law (in layer order)."""
+        out: dict = {}
+        for layer in sorted(int(k) for k in layer_ids):
+            out.setdefault(self.law(layer), []).append(layer)
+        return [(law, tuple(ids)) for law, ids in out.items()]
+
+    def shared(self, layer_ids) -> Prony | None:
+        """The one Prony of every given layer when they all have the same one, else None."""
+        groups = self.groups(layer_ids)
+        return groups[0][0] if len(groups) == 1 else None
+
+    def record(self) -> dict:
+        """run.json's description of the laws."""
+        def one(law):
+            return None if law is None else {"g": list(law.g), "tau_s": list(law.tau_s), "g_inf": law.g_inf}
+        return {"default": one(self.default), "layers": {str(k): one(v) for k, v in self.layers},
+                "moduli": "G(t) = G0 g_L(t) and K(t) = K0 g_L(t) in layer L (nu fixed); null: elastic"}
+
+
+class StepHistory:
+    """The hereditary integral y = g_inf x + sum_i g_i h_i of a Prony law, advanced one time step
+    at a time for x of any shape (`hereditary`'s recursion): y_{n+1} = alpha(dt) x_{n+1} + rest(dt),
+    alpha(dt) = g_inf + sum g_i b_i(dt). law None: elastic (y = x)."""
+
+    def __init__(self, law: Prony | None, shape):
+        self.law = law
+        self.x = np.zeros(shape)
+        self.h = None if law is None else np.zeros((len(law.g),) + tuple(np.atleast_1d(shape)))
+
+    def _ab(self, dt: float):
+        tau = np.asarray(self.law.tau_s)
+        a = np.exp(-dt / tau)
+        b = -np.expm1(-dt / tau) * tau / dt if dt > 0 else np.ones_like(tau)
+        return a, b
+
+    def alpha(self, dt: float) -> float:
+        """Weight of x_{n+1} in y_{n+1} after a step dt [s] (1: elastic or dt = 0)."""
+        if self.law is None:
+            return 1.0
+        return self.law.g_inf + float(np.dot(self.law.g, self._ab(dt)[1]))
+
+    def rest(self, dt: float) -> np.ndarray:
+        """The part of y_{n+1} set by the history: sum g_i (a_i h_i - b_i x_n)."""
+        if self.law is None:
+            return np.zeros_like(self.x)
+        a, b = self._ab(dt)
+        return np.tensordot(np.asarray(self.law.g), a.reshape(-1, *[1] * self.x.ndim) * self.h
+                            - b.reshape(-1, *[1] * self.x.ndim) * self.x, axes=1)
+
+    def advance(self, dt: float, x) -> np.ndarray:
+        """Take the step to x_{n+1} = x; returns y_{n+1}."""
+        x = np.asarray(x, float)
+        if self.law is None:
+            self.x = x.copy()
+            return x.copy()
+        a, b = self._ab(dt)
+        shape = (-1,) + (1,) * x.ndim
+        self.h = a.reshape(shape) * self.h + b.reshape(shape) * (x - self.x)
+        self.x = x.copy()
+        return self.law.g_inf * x + np.tensordot(np.asarray(self.law.g), self.h, axes=1)

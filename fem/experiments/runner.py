@@ -25,9 +25,11 @@ from fem.contact.indentors import approach_direction, make_indentor
 from fem.contact.linear import MAX_DEPTH_MM, ContactModel, reach, tissue_mm
 from fem.core.fields import centroid_jacobians
 from fem.core.materials import FLUID_LAYER
+from fem.core.viscoelastic import LayerLaws
 from fem.experiments.response import ResponseStore, contact_model, stored_responses
 from fem.experiments.scene import AXES, Experiment, Receptors, Scene, line_text
 from fem.experiments.spiking import scene_responses
+from fem.experiments.stepping import stepped_course
 from fem.experiments.traces import frequency_warning
 from fem.experiments.viscoelastic import elastic_indentations, relaxed_steps
 from fem.io.modelfolder import (
@@ -72,6 +74,7 @@ class ExperimentRun:
     tissue_mm: float = float("inf")     # the tissue over the bone along its approach (`tissue_limit_mm`)
     validity: dict | None = None        # the linear result's range (`linear_validity`), run.json's "validity"
     viscoelastic: dict | None = None    # a relaxed time course's method and forces (run.json's "viscoelastic")
+    stepped: object = None              # a course stepped in time: its fem.experiments.stepping.Stepped
 
     @property
     def name(self) -> str:
@@ -208,7 +211,9 @@ def run_experiments(model, info, scene: Scene, progress=None, store=None, only: 
     only: index of the one experiment to indent (`run_experiment`); the model is still
     factorised for every candidate the whole scene can reach, so its numbers are the full run's.
     With the scene's [viscoelastic] law, traced experiments are solved elastically
-    (`fem.experiments.viscoelastic.elastic_indentations`) and relaxed in time (`relaxed_steps`)."""
+    (`fem.experiments.viscoelastic.elastic_indentations`) and relaxed in time (`relaxed_steps`);
+    with a law per layer whose spectra differ, they are stepped in time instead
+    (`fem.experiments.stepping.stepped_course`)."""
     progress = as_progress(progress)
     sn, runs, warnings, touched, line, grid = _plan(model, info, scene)
     rc = scene.receptors
@@ -223,8 +228,10 @@ def run_experiments(model, info, scene: Scene, progress=None, store=None, only: 
         responses, sampler, used = stored_responses(store, model, [r.indentor.approach for r in runs], grid,
                                                     touched, progress)
         cm, system = contact_model(model, sn, responses), None
-    law = scene.viscoelastic
-    todo = [(run, off, load) for k, run in enumerate(runs) if only is None or k == only
+    law, layered = split_laws(scene.viscoelastic, model)
+    chosen = [run for k, run in enumerate(runs) if only is None or k == only]
+    stepped = [run for run in chosen if layered is not None and run.experiment.trace is not None]
+    todo = [(run, off, load) for run in chosen if run not in stepped
             for off, load in elastic_indentations(run.experiment, law)]
     _check_forces(cm, todo)
     solved = {}                       # a trace repeats indentations (a hold): each is solved once
@@ -245,24 +252,45 @@ def run_experiments(model, info, scene: Scene, progress=None, store=None, only: 
                 system.restart_refinement()
             cm.restart()
         run.seconds += time.perf_counter() - t0
+    for run in stepped:
+        t0 = time.perf_counter()
+        with progress.task(f"{run.name}: {len(run.experiment.times_s)} viscoelastic time steps", kind="stepping"):
+            run.steps, run.viscoelastic, run.stepped = stepped_course(model, info, run, layered, sampler,
+                                                                     sn.nodes[touched])
+        U = run.stepped.displacement_mm
+        run.validity = linear_validity(run, sampler, None, model, displacement=lambda i, U=U: U[:, i])
+        run.seconds += time.perf_counter() - t0
     return SceneRun(model, info, scene, cm, sn, grid, sampler, list(rc.measures), line, runs, warnings, used)
 
 
-def linear_validity(run: ExperimentRun, sampler: ReceptorSampler, cm: ContactModel | None, model) -> dict:
+def split_laws(law, model):
+    """(the Prony law every layer shares or None, the LayerLaws to step in time or None) of a
+    scene's [viscoelastic] on a model (fem.core.viscoelastic: a Prony, or LayerLaws whose layers
+    of this model may all share one law)."""
+    if not isinstance(law, LayerLaws):
+        return law, None
+    groups = law.groups(np.unique(model.layer[model.layer != FLUID_LAYER]))
+    return (groups[0][0], None) if len(groups) == 1 else (None, law)
+
+
+def linear_validity(run: ExperimentRun, sampler: ReceptorSampler, cm: ContactModel | None, model,
+                    displacement=None) -> dict:
     """Whether an experiment's linear results are within their range (run.json's "validity"): the
     largest receptor strain (max |principal strain| over its points and indentations, against
     MAX_LINEAR_STRAIN), and the fraction of the elements (the fluid core's aside) that the
     displacement of its deepest indentation (`checked_indentation`; the largest force among equal
     depths) turns inside out (`fem.core.fields.centroid_jacobians` <= 0, against
-    MAX_INVERTED_FRACTION). The full field takes one solve with the factorised contact model `cm`;
-    None (a stored response model answered) leaves the inversion unchecked (null)."""
+    MAX_INVERTED_FRACTION). The full field takes one solve with the factorised contact model `cm`,
+    or is displacement(step index) (a stepped course); neither (a stored response model answered)
+    leaves the inversion unchecked (null)."""
     steps = [res for _, res in run.steps]
     strain = [float(np.abs(sampler.state(r.observed).principal_strain).max(initial=0.0)) for r in steps]
     worst = int(np.argmax(strain))
     deepest = max(range(len(steps)), key=lambda i: (float(steps[i].depth_mm.max()), steps[i].total_force_N))
     inverted = None
-    if cm is not None:
-        u = cm.compliance(run.indentor.approach).displacement(steps[deepest].force_N)
+    if cm is not None or displacement is not None:
+        u = (displacement(deepest) if displacement is not None
+             else cm.compliance(run.indentor.approach).displacement(steps[deepest].force_N))
         solid = model.layer != FLUID_LAYER
         inverted = float(np.mean(centroid_jacobians(model, u)[solid] <= 0))
     linear = strain[worst] <= MAX_LINEAR_STRAIN and (inverted is None or inverted <= MAX_INVERTED_FRACTION)
@@ -414,6 +442,8 @@ def store_blocker(scene: Scene) -> str | None:
     """Why stored response models cannot answer a scene (None when they can)."""
     if scene.afferents is not None:
         return "afferents need the stresses at their own sites"
+    if isinstance(scene.viscoelastic, LayerLaws):
+        return "viscoelastic layers with their own spectra are stepped in time on the factorised model"
     if any(writes_pvd(scene.output, len(e.indentations)) for e in scene.experiments):
         return "the PVD output needs full fields"
     return None

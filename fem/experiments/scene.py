@@ -47,7 +47,7 @@ from fem.contact.indentors import orientation_deg, shapes_for
 from fem.contact.linear import MAX_DEPTH_MM
 from fem.core.materials import DEFAULT_CODE, DEFAULT_NU, Material
 from fem.core.measures import check_names
-from fem.core.viscoelastic import PAWLUK_HOWE_TAU_S, Prony
+from fem.core.viscoelastic import PAWLUK_HOWE_TAU_S, LayerLaws, Prony
 from fem.experiments.traces import check, fractions
 from fem.io.nwb import check_available
 from fem.receptors.grid import DEFAULT_DEPTHS_MM, DEFAULT_MEASURES
@@ -417,14 +417,18 @@ class Afferents:
 
 @dataclass(frozen=True)
 class Viscoelastic:
-    """[viscoelastic]: every layer's moduli relax by one Prony series (fem.core.viscoelastic.Prony)."""
+    """[viscoelastic]: the layers' moduli relax by a Prony series (fem.core.viscoelastic.Prony), one
+    for every layer or, with `layers`, one per layer (fem.core.viscoelastic.LayerLaws)."""
     g: tuple = _key("", _values, None, "weights of the terms (> 0, sum < 1; 1 - sum: the relaxed fraction); "
                     "required: no published fingerpad weights are built in")
     tau_s: tuple = _key("s", _values, lambda: PAWLUK_HOWE_TAU_S, "relaxation times (distinct, > 0)")
+    layers: tuple = _key("", lambda v, k, w: _layer_laws(v, k, w), tuple,
+                         'per layer: {g = [...], tau_s = [...]} or "elastic" (default: g and tau_s above)')
 
     @classmethod
-    def law(cls, value, key, where) -> Prony | None:
-        """The Prony law of a scene's [viscoelastic] table (g required, tau_s optional)."""
+    def law(cls, value, key, where) -> Prony | LayerLaws | None:
+        """The law of a scene's [viscoelastic] table (g required, tau_s optional; with layers, a
+        LayerLaws whose unnamed layers take g and tau_s)."""
         if not isinstance(value, dict):
             raise _bad(key, where, "a [viscoelastic] table with the weights g (and tau_s)", value)
         kw = _parse_table(cls, value, "[viscoelastic]")
@@ -432,7 +436,28 @@ class Viscoelastic:
             raise InputError(f"{where}: [viscoelastic] needs the weights g of its relaxation times tau_s "
                              f"(default {list(PAWLUK_HOWE_TAU_S)} s), e.g. g = [0.2, 0.2, 0.2] from your "
                              "relaxation measurement; no published fingerpad weights are built in")
-        return Prony(**kw)
+        layers = kw.pop("layers", ())
+        default = Prony(**kw)
+        return LayerLaws(default, layers) if layers else default
+
+
+def _layer_laws(value, key, where) -> tuple:
+    """((layer, Prony or None), ...) from {layer = {g = [...], tau_s = [...]} or "elastic"}."""
+    if not isinstance(value, dict) or not value:
+        raise _bad(key, where, 'a table of layer = {g = [...], tau_s = [...]} or "elastic", e.g. '
+                               '{1 = {g = [0.3], tau_s = [0.05]}, 5 = "elastic"}', value)
+    out = []
+    for name, spec in value.items():
+        if not str(name).isdigit() or int(name) < 1:
+            raise InputError(f"[viscoelastic] layers: {name!r} is not a layer number (1 = the epidermis, ...)")
+        if spec == "elastic":
+            out.append((int(name), None))
+            continue
+        kw = _parse_table(Viscoelastic, spec, f"[viscoelastic] layers {name}")
+        if kw.get("g") is None or "layers" in kw:
+            raise InputError(f'[viscoelastic] layers {name}: give its weights g (and tau_s), or "elastic"')
+        out.append((int(name), Prony(**kw)))
+    return tuple(sorted(out))
 
 
 @dataclass(frozen=True)
@@ -553,7 +578,7 @@ class Scene:
                                         "modulus in Pa), or moduli per layer in MPa", text=str,
                                         default_text="the model's")
     nu: float | None = _key("", _number, None, "Poisson ratio", text=nonnegative, default_text="the model's")
-    viscoelastic: Prony | None = _key(  # noqa: RUF009
+    viscoelastic: Prony | LayerLaws | None = _key(  # noqa: RUF009
         "", Viscoelastic.law, None, "[viscoelastic] table: every layer relaxes (traced experiments only)",
         default_text="elastic")
     receptors: Receptors = _key("", lambda v, key, where: Receptors.from_dict(v), Receptors, "[receptors]")  # noqa: RUF009

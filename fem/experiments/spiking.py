@@ -10,7 +10,8 @@ is refined by bisection until linear interpolation between its loads is within T
 of the inputs solved at the midpoints (`tabulate`). Viscoelastic layers relax the tabulated
 elastic stress at 5 kHz (`fem.receptors.afferents.respond`); under force control the course's
 load is the elastic force that the creep gives (`fem.experiments.viscoelastic`). A scan moves the
-indentor: its inputs are the samples', linear in time in between.
+indentor, and layers with their own spectra make the path matter (`fem.experiments.stepping`):
+their inputs are the samples', linear in time in between.
 
     population, responses = scene_responses(scene_run)    # {experiment name: PopulationResponse}
 """
@@ -105,6 +106,23 @@ def fine_loads(exp, law=None) -> np.ndarray:
     return x
 
 
+def stepped_inputs(model, population: Population, run) -> np.ndarray:
+    """(n, k) static input (-n.sigma.n, MPa) of a population through a course stepped in time
+    (fem.experiments.stepping): each layer group's elastic stress at the afferents relaxed by its
+    own law over the sample times, summed."""
+    def stress_rows(m):
+        s = sampler_of(m, population)
+        return s.operator[int(sum(s.sizes[:-1])):]
+    times = run.experiment.times_s
+    sigma = sum(v if law is None else law.relax(times, v.T).T
+                for law, v in run.stepped.group_values(model, stress_rows))      # (n * ncomp, k)
+    base = sampler_of(model, population)
+    rows = base.operator @ run.stepped.displacement_mm
+    rows[int(sum(base.sizes[:-1])):] = sigma
+    return np.stack([-np.einsum("ni,nij,nj->n", population.normal, base.state(rows[:, j]).stress, population.normal)
+                     for j in range(len(times))], axis=1)
+
+
 def scene_responses(scene_run) -> tuple[Population | None, dict]:
     """(the population, {experiment name: PopulationResponse}) of a fem.experiments.runner.SceneRun
     whose scene has [afferents]: every traced experiment drives the same population (placed
@@ -123,6 +141,11 @@ def scene_responses(scene_run) -> tuple[Population | None, dict]:
     for run in scene_run.experiments:
         exp = run.experiment
         if exp.times_s is None:
+            continue
+        if run.stepped is not None:       # layers with their own spectra: the path matters
+            static = stepped_inputs(model, pop, run)
+            deflection = np.stack([pop.at_sites(r.deflection_mm) for _, r in run.steps], axis=1)
+            out[run.name] = respond(pop, exp.times_s, static, deflection, cfg.gain, cfg.noisy, cfg.seed)
             continue
         if exp.sweep is not None:         # a scan: the inputs depend on the position, not on a load
             static, deflection = experiment_inputs(sampler, pop, scene_run.contact, run, cfg.input)

@@ -254,10 +254,14 @@ def pvd_times(run) -> tuple[list[float], str]:
 def _write_pvd(folder, run, scene_run, progress) -> None:
     """<name>_<step>.vtu with the full fields of every indentation and the <name>.pvd series, its
     timestep values as `pvd_times` says. A viscoelastic step's fields are its elastic solution's:
-    its displacements and strains, not its relaxed stresses."""
-    comp = scene_run.contact.compliance(run.indentor.approach)
-    forces = [r.force_N if r.elastic_force_N is None else r.elastic_force_N for _, r in run.steps]
-    U = comp.displacement(np.stack(forces, axis=1))                              # one solve, k loads
+    its displacements and strains, not its relaxed stresses (a course stepped in time: its own
+    displacements)."""
+    if run.stepped is not None:                     # a course stepped in time keeps its fields
+        U = run.stepped.displacement_mm
+    else:
+        comp = scene_run.contact.compliance(run.indentor.approach)
+        forces = [r.force_N if r.elastic_force_N is None else r.elastic_force_N for _, r in run.steps]
+        U = comp.displacement(np.stack(forces, axis=1))                          # one solve, k loads
     names = [f"{run.name}_{i:03d}.vtu" for i in range(len(run.steps))]
     with ThreadPoolExecutor(max_workers=2) as pool:     # files compress in parallel (zlib frees the GIL)
         writes = [pool.submit(write_mesh, folder / name, vtu_mesh(scene_run.model.solution(U[:, i])))

@@ -289,6 +289,41 @@ def sls_ramp_hold(t_s, ramp_s, g_inf, tau_s):
     return prony_ramp_hold(t_s, ramp_s, g_inf, [1.0 - g_inf], [tau_s])
 
 
+def series_sls_relaxation(t_s, thickness_mm, E_MPa, g_inf, tau_s):
+    """Stress [MPa] of standard linear solids in series (layers of thickness h_L, instantaneous
+    modulus E_L, relaxed fraction g_inf_L, relaxation time tau_L; a stack compressed in uniaxial
+    strain) after a unit step of the total shortening at t = 0 (t_s >= 0, s). Each layer is a
+    spring E_L g_inf_L beside a Maxwell arm (E_L (1 - g_inf_L), tau_L) whose stress q_L obeys
+    dq_L/dt = E_L (1 - g_inf_L) de_L/dt - q_L / tau_L; the stress sigma = E_L g_inf_L e_L + q_L is
+    the same in every layer and sum h_L e_L = 1. Eliminating the strains leaves dq/dt = A q, solved
+    by the matrix exponential from the instantaneous (all springs) state; one layer gives
+    `sls_relaxation` times E."""
+    from scipy.linalg import expm
+
+    h, E, ginf, tau = (np.asarray(v, float) for v in (thickness_mm, E_MPa, g_inf, tau_s))
+    c = 1.0 / np.sum(h / (E * ginf))
+    # strain of each layer from q (sigma = E g_inf e + q equal, sum h e = 1): e = P q + r
+    P = (np.outer(1.0 / (E * ginf), c * h / (E * ginf)) - np.diag(1.0 / (E * ginf)))
+    r = c / (E * ginf)
+    # dq/dt = E (1 - g_inf) P dq/dt - q / tau  ->  (I - D P) dq/dt = -q / tau
+    D = np.diag(E * (1.0 - ginf))
+    A = np.linalg.solve(np.eye(len(h)) - D @ P, -np.diag(1.0 / tau))
+    sigma0 = 1.0 / np.sum(h / E)
+    q0 = E * (1.0 - ginf) * sigma0 / E
+    t = np.atleast_1d(np.asarray(t_s, float))
+    q = np.stack([expm(A * tk) @ q0 for tk in t])
+    e = q @ P.T + r
+    out = (E * ginf * e + q)[:, 0]
+    return out.reshape(np.shape(t_s))
+
+
+def series_sls_creep(t_s, thickness_mm, E_MPa, g_inf, tau_s):
+    """Total shortening [mm] of the stack of `series_sls_relaxation` under a unit step of stress
+    [MPa] at t = 0: the layers' strains add, sum_L h_L J_L(t) with J_L = `sls_creep` / E_L."""
+    t = np.asarray(t_s, float)
+    return sum(h * sls_creep(t, gi, tau) / E for h, E, gi, tau in zip(thickness_mm, E_MPa, g_inf, tau_s))
+
+
 def prony_ramp_hold(t_s, ramp_s, g_inf, g, tau_s):
     """The same for a Prony series g(t) = g_inf + sum_i g_i exp(-t / tau_i) (g, tau_s: (N,)):
     (g_inf min(t, t_r) + sum_i g_i tau_i (e^-(t - min(t, t_r))/tau_i - e^-t/tau_i)) / t_r. Also
