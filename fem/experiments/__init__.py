@@ -9,7 +9,7 @@ from fingertip.lazy import lazy_exports
 _EXPORTS = {
     "Scene": "fem.experiments.scene", "Experiment": "fem.experiments.scene",
     "Receptors": "fem.experiments.scene", "load_scene": "fem.experiments.scene",
-    "parse_values": "fem.experiments.scene", "fractions": "fem.experiments.traces",
+    "parse_values": "fem.experiments.values", "fractions": "fem.experiments.traces",
     "ResponseStore": "fem.experiments.response", "run_scene": "fem.experiments.runner",
     "run_experiments": "fem.experiments.runner", "prepare_responses": "fem.experiments.runner",
     "SceneRun": "fem.experiments.runner"

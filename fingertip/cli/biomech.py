@@ -6,7 +6,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from fem.experiments.scene import Scene, parse_values
+from fem.experiments.scene import Scene
+from fem.experiments.values import parse_values
 from fingertip.cli.options import (
     FINITE,
     POSITIVE,

@@ -1,0 +1,235 @@
+"""Large-deformation frictionless contact of the layered neo-Hookean fingertip
+(`fem.core.neohookean.NeoHookean`) with a rigid indentor whose surface is known in closed form:
+cylinders (in 2D their circular section) and spheres.
+
+The gap of a candidate node is measured in the deformed configuration, to the indentor's true
+surface: the signed distance from its current position x = X + u to the surface, along the
+surface's normal (normal projection onto the circle, the cylinder's axis or the sphere's centre),
+g = |x - c|_perp - R. A node in contact carries a force lambda >= 0 along the normal n; the rest
+of the surface is free. The method is an active set with Lagrange multipliers (a semi-smooth
+Newton): each iteration solves the mixed u-p tangent bordered by the active constraints,
+
+    [ K - sum lambda_i H_i   G^T   -C^T ] [du]   [-(f_int - C^T lambda)]
+    [ G                      -D     0   ] [dp] = [ 0                   ]
+    [-C                       0     0   ] [lam]  [ g_active            ]
+
+(C: the active nodes' normals; H_i = (I - n n^T) / |x - c|_perp the curvature of the gap; the
+pressure block as in NeoHookean), and then moves the active set: nodes whose multiplier turns
+negative leave, nodes that penetrate by more than GAP_TOL_MM join. It stops when the active set
+is stable, the free residual is below `tol` of the contact force and every gap is within GAP_TOL_MM,
+so the constraint holds to the linear solver's tolerance (`fem.contact.linear.GAP_TOL_MM`): no
+penalty stiffness to tune and no penetration left by one, and sliding of the skin along a curved
+indentor comes with the normal projection. (Mortar methods pay off between two deformable bodies
+with non-matching meshes; against a rigid analytic surface node-to-surface is exact.)
+
+The indentor travels in depth increments (halved when Newton fails, up to MAX_CUTS times).
+
+    fc = FiniteContact(model, "surface", held_regions(model))
+    results = fc.indent(make_indentor("C5"), [0.5, 1.0, 2.0])
+    results[-1].force_N, results[-1].energy_Nmm, results[-1].penetration_mm
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from fem.contact.indentors import Cylinder, Ellipsoid
+from fem.contact.linear import GAP_TOL_MM
+from fem.core.linalg import SaddleFactor
+from fem.core.neohookean import NeoHookean
+from fingertip.errors import InputError
+
+STEP_MM = 0.1
+"""Depth increment of the load stepping (mm)."""
+MAX_CUTS = 6
+MAX_ITER = 40
+
+
+@dataclass
+class FiniteResult:
+    """One depth: depth_mm, force_N along the approach (N; N/mm in 2D), u (ndof,) [mm], force per
+    candidate along its normal lambda (m,) [N], gap (m,) [mm] and normal (m, 3) in the deformed
+    configuration, stored energy energy_Nmm, largest penetration penetration_mm, smallest J,
+    Newton iterations since the depth before."""
+    depth_mm: float
+    force_N: float
+    u: np.ndarray
+    contact_force_N: np.ndarray
+    gap_mm: np.ndarray
+    normal: np.ndarray
+    energy_Nmm: float
+    penetration_mm: float
+    min_J: float
+    iterations: int
+
+
+class RigidSurface:
+    """The closed-form surface of a one-part cylinder or sphere indentor (fem.contact.indentors.Indentor)."""
+
+    def __init__(self, indentor):
+        if indentor.n_parts != 1 or not isinstance(indentor.parts[0], (Cylinder, Ellipsoid)):
+            raise InputError(f"indentor {indentor.name}: finite kinematics takes cylinders (C1-C8, cylinder:<d>) "
+                             f"and spheres so far; use the linear kinematics for the others")
+        shape = indentor.parts[0]
+        if isinstance(shape, Ellipsoid) and not (shape.semi_u_mm == shape.semi_v_mm == shape.semi_w_mm):
+            raise InputError(f"indentor {indentor.name}: finite kinematics takes spheres, not ellipsoids, so far")
+        if isinstance(shape, Cylinder) and math.isfinite(shape.length_mm):
+            raise InputError(f"indentor {indentor.name}: finite kinematics takes cylinders of unbounded length so far")
+        self.radius_mm = 0.5 * shape.diameter_mm if isinstance(shape, Cylinder) else shape.semi_u_mm
+        self.axis = indentor.e1 if isinstance(shape, Cylinder) else None
+        du, dv = indentor.offsets_mm[0]
+        self.tip = indentor.origin_mm + du * indentor.e1 + dv * indentor.e2
+        self.approach = indentor.approach
+
+    def distance(self, x, travel_mm: float):
+        """(gap (n,), normal (n, 3), distance from the axis or centre (n,)) of points x (n, 3) when
+        the tip has travelled travel_mm along the approach."""
+        c = self.tip + (travel_mm - self.radius_mm) * self.approach
+        r = x - c
+        if self.axis is not None:
+            r = r - np.outer(r @ self.axis, self.axis)
+        rho = np.linalg.norm(r, axis=1)
+        return rho - self.radius_mm, r / rho[:, None], rho
+
+
+class FiniteContact:
+    """Frictionless contact of a model's neo-Hookean body (`fem.core.model.Model`, 2D or 3D) on the
+    candidate nodes of `region` with a rigid indentor; held: the regions held fixed (as
+    `Model.system`'s prescribed, zero displacement)."""
+
+    def __init__(self, model, region: str, held: dict, tol_mm: float = GAP_TOL_MM, tol: float = 1e-10):
+        self.model, self.nh, self.tol_mm, self.tol = model, NeoHookean(model), tol_mm, tol
+        self.sn = model.surface_nodes(region)
+        system = model.system(held)
+        self.fixed = system.fixed
+        if np.any(system.values):
+            raise InputError("finite contact holds its fixed regions at zero displacement")
+        self.free = np.setdiff1d(np.arange(model.ndof), self.fixed)
+        self.dofs = self.sn.dofs                                   # (m, dim)
+        self.X = np.zeros((len(self.dofs), 3))
+        self.X[:, :model.dim] = self.sn.x
+
+    def energy(self, u) -> float:
+        """Stored energy [N mm; N mm per mm in 2D] of displacement u: int mu / 2 (J^(-2/d) I1 - d)
+        + g^T D^-1 g / 2 with g_c = int q_c (J - 1) (the mixed energy with the pressure eliminated)."""
+        nh, d = self.nh, self.model.dim
+        w, g = 0.0, np.zeros(nh.npres)
+        for c in nh._chunks():
+            F = nh.deformation_gradient(u, c)
+            J = np.linalg.det(F)
+            I1 = np.einsum("eqij,eqij->eq", F, F)
+            w += float(np.sum(0.5 * nh.mu[c, None] * (J ** (-2.0 / d) * I1 - d) * nh.dx[c]))
+            g += np.bincount(nh.pdofs[c].ravel(), np.einsum("eqc,eq->ec", nh.q[c], nh.dx[c] * (J - 1.0)).ravel(),
+                             minlength=nh.npres)
+        return w + 0.5 * float(g @ (g / nh.D))
+
+    def _positions(self, u) -> np.ndarray:
+        x = self.X.copy()
+        x[:, :self.model.dim] += u[self.dofs]
+        return x
+
+    def indent(self, indentor, depths_mm, progress=None) -> list[FiniteResult]:
+        """Results at increasing depths (mm beyond first touch of the undeformed surface)."""
+        surf = RigidSurface(indentor)
+        depths = np.asarray(depths_mm, float)
+        if np.any(np.diff(depths) <= 0) or depths.min(initial=0) < 0:
+            raise InputError("finite contact: give increasing depths >= 0 mm")
+        t0 = float(indentor.standoff(self.X).min())
+        u, lam = np.zeros(self.model.ndof), np.zeros(len(self.dofs))
+        out, depth, step, cuts, iterations = [], 0.0, STEP_MM, 0, 0
+        for target in depths:
+            while depth < target - 1e-12:
+                trial = min(target, depth + step)
+                try:
+                    u_new, lam_new, its = self._newton(u, lam, surf, t0 + trial)
+                except (FloatingPointError, RuntimeError) as exc:
+                    cuts += 1
+                    step /= 2
+                    if cuts > MAX_CUTS:
+                        raise RuntimeError(f"finite contact stopped at depth {depth:.4g} mm: {exc}") from None
+                    continue
+                u, lam, depth = u_new, lam_new, trial
+                iterations += its
+                step = min(STEP_MM, 2 * step)
+            out.append(self._result(u, lam, surf, t0 + target, target, iterations))
+            iterations = 0
+            if progress is not None:
+                progress.note(f"finite contact: {target:g} mm, force {out[-1].force_N:.4g} N")
+        return out
+
+    def _result(self, u, lam, surf, travel, depth, iterations) -> FiniteResult:
+        g, n, _ = surf.distance(self._positions(u), travel)
+        force = float(np.sum(lam * (n @ surf.approach)))
+        J = self.nh.jacobian(u)
+        return FiniteResult(float(depth), force, u.copy(), lam.copy(), g, n, self.energy(u),
+                            float(max(0.0, -g.min())), float(J.min()), iterations)
+
+    def _solve(self, K, G, C, rhs, gap):
+        """(du (nf,), lambda (k,)) on the free DOFs of [[K_T, -C^T], [-C, 0]] [du, lambda] = [rhs,
+        gap], K_T = K + G^T D^-1 G the mixed tangent (`fem.core.linalg.SaddleFactor`, as the linear
+        solver's): du = x0 + X lambda with x0 = K_T^-1 rhs, X = K_T^-1 C^T, and the constraints
+        C du = -gap give (C X) lambda = -gap - C x0 (k x k, dense)."""
+        Y = SaddleFactor(K, G, self.nh.D, free=self.free)(np.column_stack([rhs, C.T.toarray()]))
+        x0, X = Y[:, 0], Y[:, 1:]
+        lam = np.linalg.solve(C @ X, -gap - C @ x0) if C.shape[0] else np.zeros(0)
+        return x0 + X @ lam, lam
+
+    def _newton(self, u, lam, surf, travel):
+        """(u, lambda (m,), iterations) at one travel, from the last state (module notes)."""
+        dim, m = self.model.dim, len(self.dofs)
+        u, lam = u.copy(), lam.copy()
+        g, n, rho = surf.distance(self._positions(u), travel)
+        active = (lam > 0) | (g < -self.tol_mm)
+        last = math.inf
+        for it in range(MAX_ITER):
+            f, K, G = self.nh.tangent(u)
+            g, n, rho = surf.distance(self._positions(u), travel)
+            act = np.flatnonzero(active)
+            # contact curvature -lambda (I - n n^T) / rho on the active nodes' DOF blocks
+            rows, cols, vals = [], [], []
+            for i in act:
+                if lam[i] <= 0:
+                    continue
+                nn = n[i, :dim]
+                H = -lam[i] * (np.eye(dim) - np.outer(nn, nn)) / rho[i]
+                d = self.dofs[i]
+                rows.append(np.repeat(d, dim))
+                cols.append(np.tile(d, dim))
+                vals.append(H.ravel())
+            if rows:
+                K = K + sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                                      shape=K.shape)
+            C = sp.csr_matrix((n[act, :dim].ravel(), (np.repeat(np.arange(len(act)), dim), self.dofs[act].ravel())),
+                              shape=(len(act), self.model.ndof))
+            r = f - C.T @ lam[act]
+            fr, Cf = r[self.free], C[:, self.free]
+            scale = max(float(np.abs(lam).sum()), 1e-300)
+            norm = float(np.linalg.norm(fr))
+            floor = it > 1 and norm > 0.5 * last and norm <= 1e-6 * scale        # round-off reached
+            feasible = (np.all(np.abs(g[act]) <= self.tol_mm) and np.all(lam[act] >= 0)
+                        and np.all(g[~active] >= -self.tol_mm))
+            if it > 0 and feasible and (norm <= self.tol * scale or floor):
+                return u, np.where(active, lam, 0.0), it
+            last = norm
+            du, new_lam = self._solve(K, G, Cf, -f[self.free], g[act])
+            alpha = 1.0
+            for _ in range(6):                     # no inverted element
+                trial = u.copy()
+                trial[self.free] += alpha * du
+                if self.nh.jacobian(trial).min() > 0:
+                    break
+                alpha /= 2
+            else:
+                raise FloatingPointError("inverted element (J <= 0)")
+            u = trial
+            lam = np.zeros(m)
+            lam[act] = new_lam
+            g_new = surf.distance(self._positions(u), travel)[0]
+            leaving = active & (lam < 0)
+            joining = ~active & (g_new < -self.tol_mm)
+            active = (active & ~leaving) | joining
+            lam[~active] = 0.0
+        raise RuntimeError(f"finite contact: Newton did not converge in {MAX_ITER} iterations")
