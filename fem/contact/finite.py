@@ -108,6 +108,7 @@ class FiniteContact:
         if np.any(system.values):
             raise InputError("finite contact holds its fixed regions at zero displacement")
         self.free = np.setdiff1d(np.arange(model.ndof), self.fixed)
+        self.stopped = None                # why the last `indent` ended early (partial=True)
         self.dofs = self.sn.dofs                                   # (m, dim)
         self.X = np.zeros((len(self.dofs), 3))
         self.X[:, :model.dim] = self.sn.x
@@ -131,8 +132,11 @@ class FiniteContact:
         x[:, :self.model.dim] += u[self.dofs]
         return x
 
-    def indent(self, indentor, depths_mm, progress=None) -> list[FiniteResult]:
-        """Results at increasing depths (mm beyond first touch of the undeformed surface)."""
+    def indent(self, indentor, depths_mm, partial: bool = False, progress=None) -> list[FiniteResult]:
+        """Results at increasing depths (mm beyond first touch of the undeformed surface). A depth
+        that cannot be reached (Newton fails after MAX_CUTS halvings of the step) raises
+        RuntimeError, or with partial=True ends the list there, the reason in `stopped`."""
+        self.stopped = None
         surf = RigidSurface(indentor)
         depths = np.asarray(depths_mm, float)
         if np.any(np.diff(depths) <= 0) or depths.min(initial=0) < 0:
@@ -149,7 +153,10 @@ class FiniteContact:
                     cuts += 1
                     step /= 2
                     if cuts > MAX_CUTS:
-                        raise RuntimeError(f"finite contact stopped at depth {depth:.4g} mm: {exc}") from None
+                        self.stopped = f"finite contact stopped at depth {depth:.4g} mm: {exc}"
+                        if partial:
+                            return out
+                        raise RuntimeError(self.stopped) from None
                     continue
                 u, lam, depth = u_new, lam_new, trial
                 iterations += its

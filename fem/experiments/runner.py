@@ -58,7 +58,8 @@ MAX_INVERTED_FRACTION = 0.0
 """Fraction of the elements that the linear displacement may turn inside out (det(I + grad u) <= 0
 at the centroid) before `linear_validity` warns: none, since such a displacement is no deformation
 a body can take."""
-LARGE_DEFORMATION = "large-deformation contact is not implemented yet"
+LARGE_DEFORMATION = ("large-deformation contact is in fem.contact.finite (cylinders and spheres, Python), "
+                     "not yet a command option")
 """What a warning of `validity_warning` points to beyond the linear range."""
 
 
