@@ -77,6 +77,20 @@ def group_models(model, laws) -> list:
     return out
 
 
+def _finished(where: str, indentor, cm, comp, res, u, observed):
+    """A step's ContactResult with the deflection and gaps of its displacement u (ndof,) and its
+    receptor values `observed`; InputError when the skin touches outside the candidates in reach."""
+    deflection = comp.B.T @ u
+    standoff = indentor.part_standoff(cm.points_mm) - res.travel_mm
+    gap = standoff[np.arange(len(standoff)), res.part] + deflection
+    if np.nanmin(gap) < -cm.tol_mm:           # only the candidates in reach were preloaded and solved for
+        raise InputError(f"{where}: the skin touches the indentor outside the candidates condensed when the model "
+                         f"was factorised: give the scene a larger depth range or reach margin "
+                         f"(fem.contact.linear.reach)")
+    return dataclasses.replace(res, kkt=dict(res.kkt), _gap_mm=gap, _deflection_mm=deflection, _observed=observed,
+                               _source=None, _unseen=None)
+
+
 def stepped_course(model, info, run, laws, sampler, candidates, progress=None):
     """([(offset, ContactResult)] one per sample time, run.json record, Stepped) of a traced
     experiment (fem.experiments.runner.ExperimentRun without steps) under per-layer laws
@@ -148,15 +162,8 @@ def stepped_course(model, info, run, laws, sampler, candidates, progress=None):
         sigma = sum(h.advance(dt, S @ u) for h, S in zip(stress_hist, stress_ops))
         observed = sampler.operator @ u
         observed[stress] = sigma
-        deflection = comp.B.T @ u
-        standoff = indentor.part_standoff(cm.points_mm) - res.travel_mm
-        gap = standoff[np.arange(len(standoff)), res.part] + deflection
-        if np.nanmin(gap) < -cm.tol_mm:       # only the candidates in reach were preloaded and solved for
-            raise InputError(f"experiment '{exp.name}' at t = {times[k]:g} s: the skin touches the indentor outside "
-                             f"the candidates condensed when the model was factorised: give the scene a larger "
-                             f"depth range or reach margin (fem.contact.linear.reach)")
-        steps.append((off, dataclasses.replace(res, kkt=dict(res.kkt), _gap_mm=gap, _deflection_mm=deflection,
-                                               _observed=observed, _source=None, _unseen=None)))
+        steps.append((off, _finished(f"experiment '{exp.name}' at t = {times[k]:g} s", indentor, cm, comp, res, u,
+                                     observed)))
         U[:, k] = u
     cm.preload_mm = None
     force = np.array([r.total_force_N for _, r in steps])

@@ -205,6 +205,14 @@ def pad3(x) -> np.ndarray:
     return out
 
 
+def stored_energy_Nmm(result) -> float:
+    """Strain energy stored in the whole linear elastic model by an indentation [N mm; N mm per mm
+    in 2D]: u^T K u / 2 = f . w / 2 with f the nodal contact forces and w the deflections along the
+    approach (no other load does work; the held regions do not move). Frictionless contact stores
+    the indentor's work: it equals the integral of force over depth (tests/fem/contact)."""
+    return 0.5 * float(np.nansum(result.force_N * result.deflection_mm))
+
+
 def run_tables(run, scene_run) -> dict:
     """{"steps", "surface", "receptors": {column: values}, "values": {measure: (k, n)}} of one experiment."""
     sn, sampler, measures, dim = scene_run.surface, scene_run.sampler, scene_run.measures, scene_run.model.dim
@@ -214,6 +222,7 @@ def run_tables(run, scene_run) -> dict:
     rows = [{"step": i, **({} if times is None else {"time_s": float(times[i])}), "offset_x_mm": off[0], "offset_z_mm": off[2],
              "depth_mm": float(r.depth_mm.max()), "force_N": r.total_force_N,
              **{f"force_part{k}_N": f for k, f in enumerate(r.part_force_N) if len(r.depth_mm) > 1},
+             "energy_Nmm": stored_energy_Nmm(r) if run.viscoelastic is None else float("nan"),
              "contact_area_mm2": r.contact_area_mm2, "contact_width_mm": _width_mm(r, ind, x3, dim),
              "max_pressure_MPa": r.max_pressure_MPa, "penetration_mm": r.kkt["penetration_mm"],
              "tensile_N": r.kkt["tensile_N"], "complementarity_Nmm": r.kkt["complementarity_Nmm"],

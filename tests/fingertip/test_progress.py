@@ -11,6 +11,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 import fingertip.progress
 import pipeline
 from fem import plots
+from fem.experiments.runner import LARGE_DEFORMATION
 from fingertip.progress import SILENT, Progress, TimingHistory, as_progress
 
 
@@ -74,8 +75,7 @@ def test_indent_progress_on_stderr_and_quiet(cyl8, tmp_path, capsys, monkeypatch
     out, err = capsys.readouterr()
     assert out == ""                             # quiet: no progress, no summary; the 1 mm step's validity warning stays
     assert err.splitlines() == ["warning: C5 at 1 mm: the linear displacement strains receptors by 0.30 (> 0.2): "
-                                "small-strain results are out of their range here; large-deformation contact is not "
-                                "implemented yet"]
+                                "small-strain results are out of their range here; " + LARGE_DEFORMATION]
 
 
 def test_force_control_summary_2d(cyl8, tmp_path, capsys):

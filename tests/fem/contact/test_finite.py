@@ -9,6 +9,7 @@ from fem.contact.finite import FiniteContact
 from fem.contact.indentors import make_indentor
 from fem.contact.linear import GAP_TOL_MM, ContactModel
 from fem.io.modelfolder import CONTACT_REGION, factorise, held_regions, read_model
+from fem.io.runfolder import stored_energy_Nmm
 from fingertip.errors import InputError
 
 DEPTHS_MM = np.linspace(0.0, 0.4, 9)[1:]
@@ -22,8 +23,8 @@ def c5_course(section):
     fc = FiniteContact(model, CONTACT_REGION[2], held_regions(model))
     finite = fc.indent(ind, DEPTHS_MM)
     cm = ContactModel.from_fe(model, factorise(model, info), CONTACT_REGION[2])
-    linear = [cm.indent(ind, depth_mm=d).total_force_N for d in DEPTHS_MM]
-    return fc, finite, np.array(linear)
+    linear = [cm.indent(ind, depth_mm=d) for d in DEPTHS_MM]
+    return fc, finite, linear
 
 
 def test_small_depth_is_the_linear_solution_and_deep_is_stiffer(c5_course):
@@ -31,7 +32,7 @@ def test_small_depth_is_the_linear_solution_and_deep_is_stiffer(c5_course):
     (measured +0.39 %; +0.02 % at 0.02 mm); at 0.4 mm it is 5-15 % stiffer (measured +9.8 %), and
     the ratio grows with depth."""
     _, finite, linear = c5_course
-    ratio = np.array([r.force_N for r in finite]) / linear
+    ratio = np.array([r.force_N for r in finite]) / np.array([r.total_force_N for r in linear])
     assert abs(ratio[0] - 1) < 1e-2
     assert 1.05 < ratio[-1] < 1.15 and np.all(np.diff(ratio) > 0)
 
@@ -48,6 +49,15 @@ def test_work_equals_stored_energy_and_the_constraint_holds(c5_course):
         assert r.penetration_mm <= GAP_TOL_MM and r.contact_force_N.min() >= 0
         assert np.abs(r.gap_mm[r.contact_force_N > 0]).max() <= GAP_TOL_MM
         assert r.min_J > 0.5
+
+
+def test_linear_contact_stores_its_work_too(c5_course):
+    """The linear solver's stored energy f . w / 2 (`fem.io.runfolder.stored_energy_Nmm`, the step
+    table's energy_Nmm) equals the integral of its force over depth within 0.5 % (measured
+    +0.012 %): node-to-surface contact on the undeformed surface is frictionless and conservative."""
+    linear = c5_course[2]
+    work = simpson(np.r_[0.0, [r.total_force_N for r in linear]], x=np.r_[0.0, DEPTHS_MM])
+    assert abs(work / stored_energy_Nmm(linear[-1]) - 1) < 5e-3
 
 
 def test_refuses_what_it_cannot_model(c5_course):
