@@ -127,6 +127,45 @@ class FiniteContact:
                              minlength=nh.npres)
         return w + 0.5 * float(g @ (g / nh.D))
 
+    def observe(self, u, sampler) -> np.ndarray:
+        """Receptor values of displacement u at a fem.receptors.grid.ReceptorSampler's points, in
+        `sampler.with_energy()`'s layout: displacement, Green-Lagrange strain E = (F^T F - I) / 2
+        with its volumetric part p / kappa from the pressure field (the mixed formulation's, as the
+        linear solver's assumed strain), Cauchy stress sigma = P F^T / J (plane strain: sigma_zz =
+        lambda / kappa p, the linear solver's in the small-strain limit) and the stored energy per
+        reference volume mu / 2 (J^(-2/d) I1 - d) + p^2 / (2 kappa) (`fem.core.neohookean`'s with
+        the pressure eliminated) [MPa]. Each reduces to the linear measure at small strain."""
+        m, d, nh = self.model, self.model.dim, self.nh
+        x = sampler.points_mm
+        cells = m.locate(x)
+        value, grad = m.locator.shape(x, cells)                   # (nb, d, n), (nb, d, d, n)
+        ue = u[m.element_dofs[:, cells]]                          # (nb, n)
+        disp = np.einsum("kn,kin->ni", ue, value)
+        F = np.einsum("kn,kijn->nij", ue, grad) + np.eye(d)
+        X = m.locator.reference(x, cells)
+        lam1 = np.vstack([1.0 - X.sum(axis=0), X])                 # P1 values (d + 1, n)
+        p = np.einsum("cn,cn->n", lam1, nh.pressure(u)[m.pressure_basis.element_dofs[:, cells]])
+        mu, kappa, lame = m.mu[cells], m.kappa[cells], m.lam[cells]
+        J = np.linalg.det(F)
+        I1 = np.einsum("nij,nij->n", F, F)
+        FiT = np.linalg.inv(F).transpose(0, 2, 1)
+        c = mu * J ** (-2.0 / d)
+        P = c[:, None, None] * (F - (I1 / d)[:, None, None] * FiT) + (p * J)[:, None, None] * FiT
+        sigma_d = P @ F.transpose(0, 2, 1) / J[:, None, None]
+        E_d = 0.5 * (F.transpose(0, 2, 1) @ F - np.eye(d))
+        trace = np.trace(E_d, axis1=1, axis2=2)
+        E_d = E_d + ((p / kappa - trace) / d)[:, None, None] * np.eye(d)    # the volumetric part assumed
+        W = 0.5 * mu * (J ** (-2.0 / d) * I1 - d) + p * p / (2.0 * kappa)
+        n = len(x)
+        if d == 3:
+            comps = [(0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1)]
+            strain = np.stack([E_d[:, i, j] for i, j in comps], axis=1)
+            stress = np.stack([sigma_d[:, i, j] for i, j in comps], axis=1)
+        else:
+            strain = np.stack([E_d[:, 0, 0], E_d[:, 1, 1], E_d[:, 0, 1]], axis=1)
+            stress = np.stack([sigma_d[:, 0, 0], sigma_d[:, 1, 1], lame / kappa * p, sigma_d[:, 0, 1]], axis=1)
+        return np.concatenate([disp.reshape(n * d), strain.ravel(), stress.ravel(), W])
+
     def _positions(self, u) -> np.ndarray:
         x = self.X.copy()
         x[:, :self.model.dim] += u[self.dofs]

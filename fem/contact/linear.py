@@ -233,6 +233,8 @@ class ContactResult:
     _unseen: np.ndarray | None = field(default=None, repr=False)    # candidates outside the reach
     elastic_force_N: np.ndarray | None = field(default=None, repr=False)   # viscoelastic: (m,) the elastic
                                     # forces, whose displacement field the result has (None: elastic)
+    stored_energy_Nmm: float | None = field(default=None, repr=False)  # finite kinematics: the model's
+                                    # stored energy (None: linear, f . w / 2)
 
     @property
     def gap_mm(self) -> np.ndarray:
@@ -279,7 +281,9 @@ class ContactResult:
         return float(self.pressure_MPa.max(initial=0.0))
 
 
-def _kkt(f, g, tol_mm):
+def kkt_record(f, g, tol_mm) -> dict:
+    """The KKT check of contact forces f (m,) [N] and gaps g (m,) [mm]: largest penetration,
+    largest tensile force, largest |f g|, and whether all are within tol_mm (and round-off)."""
     finite = np.isfinite(g)
     pen = float(max(0.0, -g[finite].min(initial=0.0)))
     tens = float(max(0.0, -f.min(initial=0.0)))
@@ -404,7 +408,7 @@ class ContactModel:
                 pressure = np.where(f > 0, f / self.areas_mm2, 0.0)
         t0 = self.first_touch_mm(indentor)
         res = ContactResult(indentor.name, travel - t0, travel.copy(), f, g, w + pre, part, pressure,
-                            self.areas_mm2, _kkt(f[sub], g[sub], self.tol_mm))
+                            self.areas_mm2, kkt_record(f[sub], g[sub], self.tol_mm))
         res.kkt["iterations"] = lcp.iterations
         res._unseen = unseen if unseen.size else None
         return res, lcp, sub

@@ -21,10 +21,12 @@ from fingertip.errors import InputError
 
 
 class State:
-    """Kinematic and static state at n points: displacement (n, 3), strain and stress (n, 3, 3)."""
+    """Kinematic and static state at n points: displacement (n, 3), strain and stress (n, 3, 3);
+    energy (n,) the stored energy per reference volume where it is not sigma:eps / 2 (finite
+    kinematics: Green-Lagrange strain, Cauchy stress and the neo-Hookean energy), else None."""
 
-    def __init__(self, displacement: np.ndarray, strain: np.ndarray, stress: np.ndarray):
-        self.displacement, self.strain, self.stress = displacement, strain, stress
+    def __init__(self, displacement: np.ndarray, strain: np.ndarray, stress: np.ndarray, energy=None):
+        self.displacement, self.strain, self.stress, self.energy = displacement, strain, stress, energy
 
     @cached_property
     def principal_strain(self) -> np.ndarray:
@@ -66,7 +68,8 @@ for _k in range(3):
          lambda s, k=_k: s.principal_strain[:, k])
     _add(f"principal_stress_{_k + 1}_MPa", "MPa", f"principal stress {_k + 1} (1 largest, tension +)",
          lambda s, k=_k: s.principal_stress[:, k])
-_add("sed_MPa", "MPa", "strain energy density sigma:eps / 2", lambda s: 0.5 * np.einsum("nij,nij->n", s.stress, s.strain))
+_add("sed_MPa", "MPa", "strain energy density sigma:eps / 2 (finite kinematics: the stored energy per reference volume)",
+     lambda s: 0.5 * np.einsum("nij,nij->n", s.stress, s.strain) if s.energy is None else s.energy)
 _add("max_tensile_strain", "1", "largest principal strain", lambda s: s.principal_strain[:, 0])
 _add("max_compressive_strain", "1", "minus the smallest principal strain (positive in compression)",
      lambda s: -s.principal_strain[:, 2])

@@ -21,8 +21,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from fem.contact.facets import fe_facets, smoothed_pressure
+from fem.contact.finite import FiniteContact
 from fem.contact.indentors import approach_direction, make_indentor
-from fem.contact.linear import MAX_DEPTH_MM, ContactModel, reach, tissue_mm
+from fem.contact.linear import MAX_DEPTH_MM, ContactModel, ContactResult, kkt_record, reach, tissue_mm
 from fem.core.fields import centroid_jacobians
 from fem.core.materials import FLUID_LAYER
 from fem.core.viscoelastic import LayerLaws
@@ -39,6 +41,7 @@ from fem.io.modelfolder import (
     factorise,
     folder_dim,
     folder_info,
+    held_regions,
     read_model,
     receptor_surface,
 )
@@ -58,8 +61,8 @@ MAX_INVERTED_FRACTION = 0.0
 """Fraction of the elements that the linear displacement may turn inside out (det(I + grad u) <= 0
 at the centroid) before `linear_validity` warns: none, since such a displacement is no deformation
 a body can take."""
-LARGE_DEFORMATION = ("large-deformation contact is in fem.contact.finite (cylinders and spheres, Python), "
-                     "not yet a command option")
+LARGE_DEFORMATION = ("for large deformation use --kinematics finite (scene: kinematics = \"finite\"; cylinders and "
+                     "spheres by depth)")
 """What a warning of `validity_warning` points to beyond the linear range."""
 
 
@@ -216,6 +219,8 @@ def run_experiments(model, info, scene: Scene, progress=None, store=None, only: 
     with a law per layer whose spectra differ, they are stepped in time instead
     (`fem.experiments.stepping.stepped_course`)."""
     progress = as_progress(progress)
+    if scene.kinematics == "finite":
+        return finite_experiments(model, info, scene, progress, only)
     sn, runs, warnings, touched, line, grid = _plan(model, info, scene)
     rc = scene.receptors
     used = []
@@ -262,6 +267,40 @@ def run_experiments(model, info, scene: Scene, progress=None, store=None, only: 
         run.validity = linear_validity(run, sampler, None, model, displacement=lambda i, U=U: U[:, i])
         run.seconds += time.perf_counter() - t0
     return SceneRun(model, info, scene, cm, sn, grid, sampler, list(rc.measures), line, runs, warnings, used)
+
+
+def finite_experiments(model, info, scene: Scene, progress, only: int | None = None) -> SceneRun:
+    """`run_experiments` with finite kinematics (`fem.contact.finite`): each experiment's depths in
+    turn on the neo-Hookean model, its steps ContactResults with the force per candidate along the
+    approach, the deflection along it, the normal gaps, the pressure of the normal forces over the
+    reference areas (nominal), the KKT check, the stored energy, and receptor values of the finite
+    state (`FiniteContact.observe`, read by the sampler `with_energy`). No contact model (no PVD)."""
+    sn, runs, warnings, _, line, grid = _plan(model, info, scene)
+    with progress.task(f"receptor operators at {len(grid.points_mm)} points", kind=f"sampler-{model.dim}d",
+                       size=len(grid.points_mm)):
+        sampler = ReceptorSampler(model, grid)
+    fc = FiniteContact(model, CONTACT_REGION[model.dim], held_regions(model))
+    facets = fe_facets(model, CONTACT_REGION[model.dim], sn)
+    for k, run in enumerate(runs):
+        if only is not None and k != only:
+            continue
+        t0 = time.perf_counter()
+        ind = run.indentor
+        with progress.task(f"{run.name}: finite contact to {max(run.experiment.depth_mm):g} mm", kind="finite"):
+            results = fc.indent(ind, run.experiment.depth_mm, progress=progress)
+        first = float(ind.standoff(fc.X).min())
+        for r in results:
+            f = r.contact_force_N * (r.normal @ ind.approach)
+            res = ContactResult(ind.name, np.array([r.depth_mm]), np.array([first + r.depth_mm]), f, r.gap_mm,
+                                r.u[sn.dofs] @ ind.approach[:model.dim], np.zeros(len(f), int),
+                                smoothed_pressure(r.contact_force_N, *facets), sn.area,
+                                kkt_record(r.contact_force_N, r.gap_mm, fc.tol_mm), _observed=fc.observe(r.u, sampler),
+                                stored_energy_Nmm=r.energy_Nmm)
+            res.kkt["iterations"] = r.iterations
+            run.steps.append((np.zeros(3), res))
+        run.seconds += time.perf_counter() - t0
+    return SceneRun(model, info, scene, None, sn, grid, sampler.with_energy(), list(scene.receptors.measures), line,
+                    runs, warnings, [])
 
 
 def split_laws(law, model):
@@ -445,6 +484,8 @@ def store_blocker(scene: Scene) -> str | None:
         return "afferents need the stresses at their own sites"
     if isinstance(scene.viscoelastic, LayerLaws):
         return "viscoelastic layers with their own spectra are stepped in time on the factorised model"
+    if scene.kinematics == "finite":
+        return "finite kinematics solves the neo-Hookean model"
     if any(writes_pvd(scene.output, len(e.indentations)) for e in scene.experiments):
         return "the PVD output needs full fields"
     return None

@@ -43,7 +43,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fem.contact.indentors import orientation_deg, shapes_for
+from fem.contact.indentors import Cylinder, Ellipsoid, orientation_deg, shapes_for
 from fem.contact.linear import MAX_DEPTH_MM
 from fem.core.materials import DEFAULT_CODE, DEFAULT_NU, Material
 from fem.core.measures import check_names
@@ -530,6 +530,8 @@ class Scene:
     afferents: Afferents | None = _key("", lambda v, key, where: Afferents.from_dict(v), None, "[afferents]")  # noqa: RUF009
     max_indentations: int = _key("", _count, MAX_INDENTATIONS, "most indentations the scene may run (all its "
                                  "experiments together)", text=lambda word: _whole(word, "max_indentations"))
+    kinematics: str = _key("", _text, "linear", "linear (small strain) or finite (large deformation: neo-Hookean "
+                           "layers, cylinders and spheres by depth; fem.contact.finite)", text=str)
 
     @classmethod
     def from_dict(cls, d, source: str = "scene", max_indentations: int | None = None) -> Scene:
@@ -555,6 +557,7 @@ class Scene:
             _check_viscoelastic(source, experiments, kw.get("afferents"))
         scene = cls(experiments=experiments, **kw)
         scene.check_count()
+        scene.check_kinematics()
         return scene
 
     @property
@@ -569,6 +572,30 @@ class Scene:
             raise InputError(f"the scene asks for {n} indentations, more than max_indentations "
                              f"{self.max_indentations}: use fewer depths or sweep positions (a larger step), "
                              f"or raise max_indentations")
+
+    def check_kinematics(self) -> None:
+        """Raise InputError for what finite kinematics does not run yet (fem.contact.finite): force
+        control, time courses, sweeps, indentors other than cylinders and spheres, viscoelastic
+        layers, afferents and PVD output."""
+        if self.kinematics not in ("linear", "finite"):
+            raise InputError(f'kinematics must be "linear" or "finite", got {self.kinematics!r}')
+        if self.kinematics == "linear":
+            return
+        why = ("viscoelastic layers" if self.viscoelastic is not None else
+               "afferents" if self.afferents is not None else
+               "a PVD series (pvd = true)" if self.output.pvd else None)
+        for exp in self.experiments:
+            parts = shapes_for(exp.indentor)[1]
+            sphere = (len(parts) == 1 and isinstance(parts[0], Ellipsoid)
+                      and parts[0].semi_u_mm == parts[0].semi_v_mm == parts[0].semi_w_mm)
+            cylinder = len(parts) == 1 and isinstance(parts[0], Cylinder) and not np.isfinite(parts[0].length_mm)
+            why = why or (f"experiment '{exp.name}': force control" if exp.force_N is not None else
+                          f"experiment '{exp.name}': a time course" if exp.trace is not None else
+                          f"experiment '{exp.name}': a sweep" if exp.sweep is not None else
+                          f"experiment '{exp.name}': indentor {exp.indentor}" if not (sphere or cylinder) else None)
+        if why:
+            raise InputError(f"kinematics = finite runs depth series of cylinders (C1-C8, cylinder:<d>) and spheres "
+                             f"so far, not {why}: use kinematics = linear for it")
 
     def check_dim(self, dim: int) -> None:
         """Raise InputError if an experiment cannot run on a model of `dim` (`Experiment.check_dim`)."""

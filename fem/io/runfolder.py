@@ -69,6 +69,13 @@ def experiment_record(run) -> dict:
             "files": [f"{exp.name}.csv", f"{exp.name}_surface.csv", f"{exp.name}_receptors.csv"]}
 
 
+KINEMATICS = {"linear": {"name": "linear", "strain": "small strain", "gap": "along the approach, undeformed surface"},
+              "finite": {"name": "finite", "strain": "Green-Lagrange, volumetric part from the pressure field",
+                         "stress": "Cauchy", "sed": "neo-Hookean stored energy per reference volume",
+                         "gap": "normal projection onto the indentor, deformed surface"}}
+"""run.json's "kinematics" entry per scene kinematics (docs/indentation.md)."""
+
+
 def run_record(model_dir, scene_run) -> dict:
     """run.json: what produced a run folder (model, material, receptors, experiments) from a
     model folder and its fem.experiments.runner.SceneRun."""
@@ -90,6 +97,7 @@ def run_record(model_dir, scene_run) -> dict:
             "material": mat.code, "E_MPa": {str(k): v for k, v in sorted(mat.E_MPa.items())},
             "nu": nus.pop() if len(nus) == 1 else {str(k): v for k, v in sorted(mat.nu.items())},
             **({"viscoelastic": law.record()} if law is not None else {}),
+            "kinematics": KINEMATICS[scene_run.scene.kinematics],
             "receptors": {"depths_mm": np.unique(grid.depth_mm).tolist(),
                           "spacing_mm": float(scene_run.scene.receptors.spacing_mm),
                           "line": None if line is None else ["xyz"[line[0]], line[1]],
@@ -181,7 +189,7 @@ def write_run(folder, model_dir, scene_run, afferents=(None, {}), progress=None)
             if scene_run.scene.afferents.nwb:
                 write_nwb(folder / run.name / NWB_FILE, run.name, responses[run.name],
                           tables["steps"]["depth_mm"], tables["steps"]["force_N"])
-        if writes_pvd(out, len(run.steps)):
+        if writes_pvd(out, len(run.steps)) and scene_run.scene.kinematics == "linear":    # finite: no PVD yet
             _write_pvd(folder, run, scene_run, progress)
     record = run_record(model_dir, scene_run)
     if population is not None:
@@ -209,7 +217,10 @@ def stored_energy_Nmm(result) -> float:
     """Strain energy stored in the whole linear elastic model by an indentation [N mm; N mm per mm
     in 2D]: u^T K u / 2 = f . w / 2 with f the nodal contact forces and w the deflections along the
     approach (no other load does work; the held regions do not move). Frictionless contact stores
-    the indentor's work: it equals the integral of force over depth (tests/fem/contact)."""
+    the indentor's work: it equals the integral of force over depth (tests/fem/contact). A finite
+    kinematics result carries its own (the neo-Hookean energy, fem.contact.finite)."""
+    if result.stored_energy_Nmm is not None:
+        return result.stored_energy_Nmm
     return 0.5 * float(np.nansum(result.force_N * result.deflection_mm))
 
 

@@ -15,6 +15,7 @@ most INTERFACE_SNAP_MM (`ReceptorSampler.shift_mm`), so neighbouring receptors a
 """
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 
 import numpy as np
@@ -82,6 +83,7 @@ class ReceptorSampler:
 
     def __init__(self, model, grid: ReceptorGrid):
         pts, self.shift_mm = _off_interfaces(model, grid)
+        self.points_mm = pts                    # (n, dim) where the operators sample (off interfaces)
         self.dim, self.n = model.dim, len(pts)
         blocks = [model.displacement_operator(pts), model.strain_operator(pts), model.stress_operator(pts)]
         self.sizes = [b.shape[0] for b in blocks]
@@ -99,9 +101,17 @@ class ReceptorSampler:
         self.operator = None
         return self
 
+    def with_energy(self) -> "ReceptorSampler":
+        """This sampler reading a fourth block of values, the stored energy per reference volume
+        (n,) of finite kinematics (`fem.contact.finite.FiniteContact.observe`)."""
+        other = copy.copy(self)
+        other.sizes = list(self.sizes[:3]) + [self.n]
+        return other
+
     def state(self, values) -> State:
-        """Measures state from `operator @ u` (r,)."""
-        u, e, s = np.split(np.asarray(values, float), np.cumsum(self.sizes)[:-1])
+        """Measures state from `operator @ u` (r,) (with_energy: the finite state's four blocks)."""
+        blocks = np.split(np.asarray(values, float), np.cumsum(self.sizes)[:-1])
+        u, e, s = blocks[:3]
         n, d = self.n, self.dim
         disp = np.zeros((n, 3))
         disp[:, :d] = u.reshape(n, d)
@@ -111,7 +121,7 @@ class ReceptorSampler:
         else:
             strain = _sym(e.reshape(n, 3), (0, 1, 0), (0, 1, 1))
             stress = _sym(s.reshape(n, 4), (0, 1, 2, 0), (0, 1, 2, 1))
-        return State(disp, strain, stress)
+        return State(disp, strain, stress, blocks[3] if len(blocks) > 3 else None)
 
     def measures(self, values, names=DEFAULT_MEASURES) -> dict[str, np.ndarray]:
         """{name: (n,) values at the receptor points}."""

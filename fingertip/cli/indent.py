@@ -72,6 +72,7 @@ def add_indent(p):
     add_material_and_receptors(p)
     add_declared(p, Output, OUTPUT_FLAGS, defaults={"plots": "the scene's, on"})
     add_declared(p, Scene, ("max_indentations",), defaults={"max_indentations": "the scene's, 10000"})
+    add_declared(p, Scene, ("kinematics",), defaults={"kinematics": "the scene's, linear"})
     p.add_argument("--out", help="output folder (default: <model>/indent_<indentor or scene file stem>)")
     scheduler_option(p, "experiment of the scene")
     p.add_argument("--quiet", action="store_true", help="no progress and no summary")
@@ -79,7 +80,7 @@ def add_indent(p):
 
 
 FROM_SCENE = ("depth_mm", "force_N") + EXPERIMENT_FLAGS + RECEPTOR_FLAGS + MATERIAL_FLAGS + OUTPUT_FLAGS \
-    + ("max_indentations",)
+    + ("max_indentations", "kinematics")
 """Fields a --scene file sets unless their flag is given: an error about one names the scene's key,
 not the flag (`fingertip.cli.user_words`)."""
 
@@ -108,7 +109,7 @@ def indent_scene(args) -> tuple[Scene, str]:
     else:
         scene = scene_of_flags(args)
         name = scene.experiments[0].name
-    overrides = declared_values(args, Scene, MATERIAL_FLAGS)
+    overrides = declared_values(args, Scene, MATERIAL_FLAGS + ("kinematics",))
     if overrides:                                                       # the code's form, nu's range
         Material(overrides.get("material") or scene.material or DEFAULT_CODE, overrides.get("nu", DEFAULT_NU))
     output = declared_values(args, Output, OUTPUT_FLAGS)
@@ -116,7 +117,9 @@ def indent_scene(args) -> tuple[Scene, str]:
         overrides["output"] = dataclasses.replace(scene.output, **output)
     out = args.out if args.out is not None else str(Path(args.model) / f"indent_{name}")
     check_output_dir(out, marker=RUN_MARKER, what="indent run")
-    return dataclasses.replace(scene, **overrides), out
+    scene = dataclasses.replace(scene, **overrides)
+    scene.check_kinematics()                       # --kinematics finite on a scene it cannot run
+    return scene, out
 
 
 def _run_indent(args):
