@@ -181,30 +181,73 @@ class FiniteContact:
         if np.any(np.diff(depths) <= 0) or depths.min(initial=0) < 0:
             raise InputError("finite contact: give increasing depths >= 0 mm")
         t0 = float(indentor.standoff(self.X).min())
-        u, lam = np.zeros(self.model.ndof), np.zeros(len(self.dofs))
-        out, depth, step, cuts, iterations = [], 0.0, STEP_MM, 0, 0
+        u, lam, depth, out = np.zeros(self.model.ndof), np.zeros(len(self.dofs)), 0.0, []
         for target in depths:
-            while depth < target - 1e-12:
-                trial = min(target, depth + step)
-                try:
-                    u_new, lam_new, its = self._newton(u, lam, surf, t0 + trial)
-                except (FloatingPointError, RuntimeError) as exc:
-                    cuts += 1
-                    step /= 2
-                    if cuts > MAX_CUTS:
-                        self.stopped = f"finite contact stopped at depth {depth:.4g} mm: {exc}"
-                        if partial:
-                            return out
-                        raise RuntimeError(self.stopped) from None
-                    continue
-                u, lam, depth = u_new, lam_new, trial
-                iterations += its
-                step = min(STEP_MM, 2 * step)
-            out.append(self._result(u, lam, surf, t0 + target, target, iterations))
-            iterations = 0
+            try:
+                u, lam, its = self._advance(u, lam, surf, t0, depth, target)
+            except RuntimeError as exc:
+                self.stopped = str(exc)
+                if partial:
+                    return out
+                raise
+            depth = target
+            out.append(self._result(u, lam, surf, t0 + target, target, its))
             if progress is not None:
                 progress.note(f"finite contact: {target:g} mm, force {out[-1].force_N:.4g} N")
         return out
+
+    def indent_force(self, indentor, force_N: float, max_depth_mm: float, rtol: float = 1e-7,
+                     progress=None) -> FiniteResult:
+        """The state at which the force along the approach is force_N [N; N/mm in 2D]: depth steps
+        of STEP_MM until the force passes it, then the secant method, kept inside the bracket (by
+        bisection when it would leave it), each trial solved from the bracket's lower state, to
+        rtol. InputError when max_depth_mm [mm] does not reach the force."""
+        surf = RigidSurface(indentor)
+        t0 = float(indentor.standoff(self.X).min())
+        lo = (0.0, np.zeros(self.model.ndof), np.zeros(len(self.dofs)), 0.0)     # depth, u, lambda, force
+        while True:
+            if lo[0] >= max_depth_mm - 1e-12:
+                raise InputError(f"indentor {indentor.name}: {force_N:g} N not reached within {max_depth_mm:g} mm "
+                                 f"(finite kinematics: {lo[3]:.4g} N there); raise max_depth_mm or lower the force")
+            d = min(lo[0] + STEP_MM, max_depth_mm)
+            u, lam, _ = self._advance(lo[1], lo[2], surf, t0, lo[0], d)
+            hi = (d, u, lam, self._result(u, lam, surf, t0 + d, d, 0).force_N)
+            if hi[3] >= force_N:
+                break
+            lo = hi
+        for _ in range(60):
+            w = (force_N - lo[3]) / (hi[3] - lo[3])
+            d = lo[0] + (w if 0.02 < w < 0.98 else 0.5) * (hi[0] - lo[0])
+            u, lam, its = self._advance(lo[1], lo[2], surf, t0, lo[0], d)
+            res = self._result(u, lam, surf, t0 + d, d, its)
+            if abs(res.force_N - force_N) <= rtol * force_N:
+                if progress is not None:
+                    progress.note(f"finite contact: {force_N:g} N at {d:.4g} mm")
+                return res
+            if res.force_N < force_N:
+                lo = (d, u, lam, res.force_N)
+            else:
+                hi = (d, u, lam, res.force_N)
+        raise RuntimeError(f"finite contact: {force_N:g} N not bracketed to {rtol:g} in 60 trials")
+
+    def _advance(self, u, lam, surf, t0, depth, target):
+        """(u, lambda, Newton iterations) at depth `target` from the state (u, lambda) at `depth`,
+        in steps of at most STEP_MM, halved up to MAX_CUTS times when Newton fails."""
+        step, cuts, iterations = STEP_MM, 0, 0
+        while depth < target - 1e-12:
+            trial = min(target, depth + step)
+            try:
+                u_new, lam_new, its = self._newton(u, lam, surf, t0 + trial)
+            except (FloatingPointError, RuntimeError) as exc:
+                cuts += 1
+                step /= 2
+                if cuts > MAX_CUTS:
+                    raise RuntimeError(f"finite contact stopped at depth {depth:.4g} mm: {exc}") from None
+                continue
+            u, lam, depth = u_new, lam_new, trial
+            iterations += its
+            step = min(STEP_MM, 2 * step)
+        return u, lam, iterations
 
     def _result(self, u, lam, surf, travel, depth, iterations) -> FiniteResult:
         g, n, _ = surf.distance(self._positions(u), travel)

@@ -62,7 +62,7 @@ MAX_INVERTED_FRACTION = 0.0
 at the centroid) before `linear_validity` warns: none, since such a displacement is no deformation
 a body can take."""
 LARGE_DEFORMATION = ("for large deformation use --kinematics finite (scene: kinematics = \"finite\"; cylinders and "
-                     "spheres by depth)")
+                     "spheres)")
 """What a warning of `validity_warning` points to beyond the linear range."""
 
 
@@ -271,7 +271,7 @@ def run_experiments(model, info, scene: Scene, progress=None, store=None, only: 
 
 def finite_experiments(model, info, scene: Scene, progress, only: int | None = None) -> SceneRun:
     """`run_experiments` with finite kinematics (`fem.contact.finite`): each experiment's depths in
-    turn on the neo-Hookean model, its steps ContactResults with the force per candidate along the
+    turn (or its force) on the neo-Hookean model, its steps ContactResults with the force per candidate along the
     approach, the deflection along it, the normal gaps, the pressure of the normal forces over the
     reference areas (nominal), the KKT check, the stored energy, and receptor values of the finite
     state (`FiniteContact.observe`, read by the sampler `with_energy`). No contact model (no PVD)."""
@@ -286,8 +286,13 @@ def finite_experiments(model, info, scene: Scene, progress, only: int | None = N
             continue
         t0 = time.perf_counter()
         ind = run.indentor
-        with progress.task(f"{run.name}: finite contact to {max(run.experiment.depth_mm):g} mm", kind="finite"):
-            results = fc.indent(ind, run.experiment.depth_mm, progress=progress)
+        exp = run.experiment
+        if exp.force_N is not None:
+            with progress.task(f"{run.name}: finite contact at {exp.force_N:g} N", kind="finite"):
+                results = [fc.indent_force(ind, exp.force_N, exp.loads[0]["max_depth_mm"], progress=progress)]
+        else:
+            with progress.task(f"{run.name}: finite contact to {max(exp.depth_mm):g} mm", kind="finite"):
+                results = fc.indent(ind, exp.depth_mm, progress=progress)
         first = float(ind.standoff(fc.X).min())
         for r in results:
             f = r.contact_force_N * (r.normal @ ind.approach)

@@ -574,9 +574,9 @@ class Scene:
                              f"or raise max_indentations")
 
     def check_kinematics(self) -> None:
-        """Raise InputError for what finite kinematics does not run yet (fem.contact.finite): force
-        control, time courses, sweeps, indentors other than cylinders and spheres, viscoelastic
-        layers, afferents and PVD output."""
+        """Raise InputError for what finite kinematics does not run yet (fem.contact.finite): time
+        courses, sweeps, indentors other than cylinders and spheres, viscoelastic layers,
+        afferents and PVD output."""
         if self.kinematics not in ("linear", "finite"):
             raise InputError(f'kinematics must be "linear" or "finite", got {self.kinematics!r}')
         if self.kinematics == "linear":
@@ -589,12 +589,11 @@ class Scene:
             sphere = (len(parts) == 1 and isinstance(parts[0], Ellipsoid)
                       and parts[0].semi_u_mm == parts[0].semi_v_mm == parts[0].semi_w_mm)
             cylinder = len(parts) == 1 and isinstance(parts[0], Cylinder) and not np.isfinite(parts[0].length_mm)
-            why = why or (f"experiment '{exp.name}': force control" if exp.force_N is not None else
-                          f"experiment '{exp.name}': a time course" if exp.trace is not None else
+            why = why or (f"experiment '{exp.name}': a time course" if exp.trace is not None else
                           f"experiment '{exp.name}': a sweep" if exp.sweep is not None else
                           f"experiment '{exp.name}': indentor {exp.indentor}" if not (sphere or cylinder) else None)
         if why:
-            raise InputError(f"kinematics = finite runs depth series of cylinders (C1-C8, cylinder:<d>) and spheres "
+            raise InputError(f"kinematics = finite runs cylinders (C1-C8, cylinder:<d>) and spheres by depth or force "
                              f"so far, not {why}: use kinematics = linear for it")
 
     def check_dim(self, dim: int) -> None:

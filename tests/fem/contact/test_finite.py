@@ -78,7 +78,8 @@ def test_indent_with_finite_kinematics(section, tmp_path, capsys):
     receptor table measures of the finite state that equal the linear run's at 0.02 mm (within 2 %
     of the largest value at every receptor point; measured 1.1 %; at the most strained point SED
     +0.2 %, compressive strain +0.02 %, stress_yy +0.07 %), run.json names the
-    kinematics; what it does not run yet ends in one error line, exit 2, nothing written."""
+    kinematics; under force control it finds the depth whose force it is (0.3 mm to 1e-5 mm); what
+    it does not run yet ends in one error line, exit 2, nothing written."""
     common = ["indent", str(section), "--indentor", "C5", "--material", "m43338", "--quiet", "--no-plots"]
     runs = {}
     for kin in ("finite", "linear"):
@@ -98,9 +99,15 @@ def test_indent_with_finite_kinematics(section, tmp_path, capsys):
         assert np.abs(fin - lin).max() <= 0.02 * np.abs(lin).max()
     assert json.loads((runs["finite"] / "run.json").read_text())["kinematics"]["name"] == "finite"
     assert not list(runs["finite"].glob("*.vtu"))
+    by_force = tmp_path / "force"                   # force control: the depth whose force it is
+    assert pipeline.main(common + ["--force", steps["finite"][1]["force_N"], "--kinematics", "finite",
+                                   "--out", str(by_force)]) == 0
+    row = csv_rows(by_force / "C5.csv")[0]
+    assert float(row["force_N"]) == pytest.approx(float(steps["finite"][1]["force_N"]), rel=1e-6)
+    assert float(row["depth_mm"]) == pytest.approx(0.3, abs=1e-5)
     capsys.readouterr()
     base = ["indent", str(section), "--material", "m43338", "--quiet", "--kinematics", "finite"]
-    for bad in (["--indentor", "bar:2", "--depth", "0.2"], ["--indentor", "C5", "--force", "0.001"]):
+    for bad in (["--indentor", "bar:2", "--depth", "0.2"], ["--indentor", "C5", "--depth", "0.2", "--sweep", "x=0:1:1"]):
         out = tmp_path / "refused"
         code = pipeline.main(base + bad + ["--out", str(out)])
         err = capsys.readouterr().err.strip().splitlines()
