@@ -10,8 +10,10 @@ from fem.core.model import Model
 from fem.core.viscoelastic import LayerLaws, Prony
 from fem.experiments.runner import run_experiments, split_laws
 from fem.experiments.scene import Scene
+from fem.experiments.spiking import stepped_inputs
 from fem.experiments.stepping import stepped_course
 from fem.io.modelfolder import read_model
+from fem.receptors.afferents import place, sampler_of, site_inputs
 from fem.verify.closed_forms import box, series_sls_creep, series_sls_relaxation
 from fingertip.errors import InputError
 
@@ -96,3 +98,28 @@ def test_layers_table_and_its_refusals():
         bad = {"g": [0.2], "tau_s": [0.1], **bad}
         with pytest.raises(InputError):
             Scene.from_dict({"viscoelastic": bad, "experiment": [{"indentor": "plate", "depth_mm": 0.1, "trace": {}}]})
+
+
+def test_afferent_inputs_of_a_stepped_course(shop):
+    """Afferents under a course stepped in time (`fem.experiments.spiking.stepped_inputs`: each layer
+    group's stress at the afferents relaxed by its law): with one law in every layer they are the
+    correspondence principle's, the elastic inputs relaxed (coarse monkey, a 2 mm probe 1 mm deep,
+    20 samples through the ramp and the hold; measured 6e-5 of the largest input: a node at the
+    contact's edge, as the forces' 7e-7), until the instant release at the last sample."""
+    scene = Scene.from_dict({"material": [0.314, 0.0314, 0.0314, 0.0314, 100.0], "viscoelastic": {"g": [0.2, 0.2, 0.2]},
+                             "experiment": [{"indentor": "punch:2", "depth_mm": 1.0, "trace": {
+                                 "shape": "ramp_hold", "release_s": 0.0, "samples": 20}}]})
+    model, info = read_model(shop.preset("monkey", 1.5), scene.material)
+    corr = run_experiments(model, info, scene)
+    e = corr.experiments[0]
+    points = corr.contact.points_mm
+    pop = place(model, corr.surface, ("SA1", "RA"), None, points[np.argmin(e.indentor.standoff(points))], 3.0, 0)
+    steps, _, stepped = stepped_course(model, info, dataclasses.replace(e, steps=[]), LayerLaws(scene.viscoelastic),
+                                       corr.sampler, corr.surface.nodes)
+    run = dataclasses.replace(e, steps=steps, stepped=stepped)
+    got = stepped_inputs(model, pop, run)
+    elastic = site_inputs(sampler_of(model, pop), pop, corr.contact.compliance(e.indentor.approach),
+                          np.stack([r.elastic_force_N for _, r in e.steps], axis=1))
+    want = scene.viscoelastic.relax(e.experiment.times_s, elastic.T).T
+    loaded = e.experiment.times_s < 0.6 - 1e-12                     # the last sample releases at once
+    assert np.abs(got - want)[:, loaded].max() <= 1e-4 * np.abs(want).max() and np.abs(want).max() > 0
