@@ -1,19 +1,20 @@
 """Large-deformation frictionless contact of the layered neo-Hookean fingertip
 (`fem.core.neohookean.NeoHookean`) with a rigid indentor whose surface is known in closed form:
-cylinders (in 2D their circular section) and spheres.
+cylinders (in 2D their circular section) and spheres, flat bars and circular punches (`RigidSurface`).
 
 The gap of a candidate node is measured in the deformed configuration, to the indentor's true
 surface: the signed distance from its current position x = X + u to the surface, along the
-surface's normal (normal projection onto the circle, the cylinder's axis or the sphere's centre),
-g = |x - c|_perp - R. A node in contact carries a force lambda >= 0 along the normal n; the rest
-of the surface is free. The method is an active set with Lagrange multipliers (a semi-smooth
+surface's normal (normal projection onto the circle, the cylinder's axis or the sphere's centre,
+g = |x - c|_perp - R; for a flat indentor the nearest of its face, its side and its edge). A node
+in contact carries a force lambda >= 0 along the normal n; the rest of the surface is free. The method is an active set with Lagrange multipliers (a semi-smooth
 Newton): each iteration solves the mixed u-p tangent bordered by the active constraints,
 
     [ K - sum lambda_i H_i   G^T   -C^T ] [du]   [-(f_int - C^T lambda)]
     [ G                      -D     0   ] [dp] = [ 0                   ]
     [-C                       0     0   ] [lam]  [ g_active            ]
 
-(C: the active nodes' normals; H_i = (I - n n^T) / |x - c|_perp the curvature of the gap; the
+(C: the active nodes' normals; H_i = k_i (I - n n^T) with k_i the curvature of the gap's level set,
+1 / |x - c|_perp for a round indentor, 1 / distance from the edge around a flat one's edge; the
 pressure block as in NeoHookean), and then moves the active set: nodes whose multiplier turns
 negative leave, nodes that penetrate by more than GAP_TOL_MM join. It stops when the active set
 is stable, the free residual is below `tol` of the contact force and every gap is within GAP_TOL_MM,
@@ -36,7 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from fem.contact.indentors import Cylinder, Ellipsoid
+from fem.contact.indentors import Cylinder, Ellipsoid, Flat, Punch
 from fem.contact.linear import GAP_TOL_MM
 from fem.core.linalg import SaddleFactor
 from fem.core.neohookean import NeoHookean
@@ -67,32 +68,55 @@ class FiniteResult:
 
 
 class RigidSurface:
-    """The closed-form surface of a one-part cylinder or sphere indentor (fem.contact.indentors.Indentor)."""
+    """The closed-form surface of a one-part indentor (fem.contact.indentors.Indentor): a cylinder
+    of unbounded length or a sphere (round), or a flat bar of unbounded length or a circular punch
+    (flat: a face with a sharp edge, the gap to the face, to the side or to the edge, whichever is
+    nearest, as the signed distance to a semi-infinite box or cylinder)."""
 
     def __init__(self, indentor):
-        if indentor.n_parts != 1 or not isinstance(indentor.parts[0], (Cylinder, Ellipsoid)):
-            raise InputError(f"indentor {indentor.name}: finite kinematics takes cylinders (C1-C8, cylinder:<d>) "
-                             f"and spheres so far; use the linear kinematics for the others")
-        shape = indentor.parts[0]
-        if isinstance(shape, Ellipsoid) and not (shape.semi_u_mm == shape.semi_v_mm == shape.semi_w_mm):
-            raise InputError(f"indentor {indentor.name}: finite kinematics takes spheres, not ellipsoids, so far")
-        if isinstance(shape, Cylinder) and math.isfinite(shape.length_mm):
-            raise InputError(f"indentor {indentor.name}: finite kinematics takes cylinders of unbounded length so far")
-        self.radius_mm = 0.5 * shape.diameter_mm if isinstance(shape, Cylinder) else shape.semi_u_mm
-        self.axis = indentor.e1 if isinstance(shape, Cylinder) else None
+        shape = indentor.parts[0] if indentor.n_parts == 1 else None
+        sphere = isinstance(shape, Ellipsoid) and shape.semi_u_mm == shape.semi_v_mm == shape.semi_w_mm
+        unbounded = isinstance(shape, (Cylinder, Flat)) and not math.isfinite(shape.length_mm)
+        if not (sphere or unbounded or isinstance(shape, Punch)):
+            raise InputError(f"indentor {indentor.name}: finite kinematics takes cylinders (C1-C8, cylinder:<d>), "
+                             f"spheres, bars (bar:<w>) and punches so far; use the linear kinematics for the others")
+        self.round = isinstance(shape, (Cylinder, Ellipsoid))
+        if self.round:
+            self.radius_mm = 0.5 * shape.diameter_mm if isinstance(shape, Cylinder) else shape.semi_u_mm
+        else:
+            self.radius_mm = 0.5 * (shape.width_mm if isinstance(shape, Flat) else shape.diameter_mm)
+        self.axis = indentor.e1 if isinstance(shape, (Cylinder, Flat)) else None
         du, dv = indentor.offsets_mm[0]
         self.tip = indentor.origin_mm + du * indentor.e1 + dv * indentor.e2
         self.approach = indentor.approach
 
     def distance(self, x, travel_mm: float):
-        """(gap (n,), normal (n, 3), distance from the axis or centre (n,)) of points x (n, 3) when
-        the tip has travelled travel_mm along the approach."""
-        c = self.tip + (travel_mm - self.radius_mm) * self.approach
-        r = x - c
+        """(gap (n,), normal (n, 3) from the indentor towards the point, curvature (n,) [1/mm] of
+        the gap's level set at the point: 1 / distance from the axis, centre or edge, 0 on a flat
+        face or side) of points x (n, 3) when the tip has travelled travel_mm along the approach."""
+        a = self.approach
+        if self.round:
+            r = x - (self.tip + (travel_mm - self.radius_mm) * a)
+            if self.axis is not None:
+                r = r - np.outer(r @ self.axis, self.axis)
+            rho = np.linalg.norm(r, axis=1)
+            return rho - self.radius_mm, r / rho[:, None], 1.0 / rho
+        rel = x - (self.tip + travel_mm * a)
+        ahead = rel @ a                                             # beyond the face, along the approach
+        lateral = rel - np.outer(ahead, a)
         if self.axis is not None:
-            r = r - np.outer(r @ self.axis, self.axis)
-        rho = np.linalg.norm(r, axis=1)
-        return rho - self.radius_mm, r / rho[:, None], rho
+            lateral = lateral - np.outer(lateral @ self.axis, self.axis)
+        dist = np.linalg.norm(lateral, axis=1)
+        out_dir = lateral / np.maximum(dist, 1e-300)[:, None]
+        side = dist - self.radius_mm                                # beyond the side
+        corner = (ahead > 0) & (side > 0)
+        g = np.where(corner, np.hypot(ahead, side), np.maximum(ahead, side))
+        n = np.where((ahead >= side)[:, None], a, out_dir)
+        k = np.zeros(len(x))
+        if corner.any():
+            n[corner] = (ahead[corner, None] * a + side[corner, None] * out_dir[corner]) / g[corner, None]
+            k[corner] = 1.0 / g[corner]
+        return g, n, k
 
 
 class FiniteContact:
@@ -270,20 +294,20 @@ class FiniteContact:
         """(u, lambda (m,), iterations) at one travel, from the last state (module notes)."""
         dim, m = self.model.dim, len(self.dofs)
         u, lam = u.copy(), lam.copy()
-        g, n, rho = surf.distance(self._positions(u), travel)
+        g, n, curv = surf.distance(self._positions(u), travel)
         active = (lam > 0) | (g < -self.tol_mm)
         last = math.inf
         for it in range(MAX_ITER):
             f, K, G = self.nh.tangent(u)
-            g, n, rho = surf.distance(self._positions(u), travel)
+            g, n, curv = surf.distance(self._positions(u), travel)
             act = np.flatnonzero(active)
-            # contact curvature -lambda (I - n n^T) / rho on the active nodes' DOF blocks
+            # contact curvature -lambda k (I - n n^T) on the active nodes' DOF blocks
             rows, cols, vals = [], [], []
             for i in act:
-                if lam[i] <= 0:
+                if lam[i] <= 0 or curv[i] == 0:
                     continue
                 nn = n[i, :dim]
-                H = -lam[i] * (np.eye(dim) - np.outer(nn, nn)) / rho[i]
+                H = -lam[i] * curv[i] * (np.eye(dim) - np.outer(nn, nn))
                 d = self.dofs[i]
                 rows.append(np.repeat(d, dim))
                 cols.append(np.tile(d, dim))

@@ -62,7 +62,7 @@ MAX_INVERTED_FRACTION = 0.0
 at the centroid) before `linear_validity` warns: none, since such a displacement is no deformation
 a body can take."""
 LARGE_DEFORMATION = ("for large deformation use --kinematics finite (scene: kinematics = \"finite\"; cylinders and "
-                     "spheres)")
+                     "spheres, bars and punches)")
 """What a warning of `validity_warning` points to beyond the linear range."""
 
 

@@ -43,7 +43,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fem.contact.indentors import Cylinder, Ellipsoid, orientation_deg, shapes_for
+from fem.contact.indentors import Cylinder, Ellipsoid, Flat, Punch, orientation_deg, shapes_for
 from fem.contact.linear import MAX_DEPTH_MM
 from fem.core.materials import DEFAULT_CODE, DEFAULT_NU, Material
 from fem.core.measures import check_names
@@ -575,8 +575,8 @@ class Scene:
 
     def check_kinematics(self) -> None:
         """Raise InputError for what finite kinematics does not run yet (fem.contact.finite): time
-        courses, sweeps, indentors other than cylinders and spheres, viscoelastic layers,
-        afferents and PVD output."""
+        courses, sweeps, indentors other than cylinders, spheres, bars and punches, viscoelastic
+        layers, afferents and PVD output."""
         if self.kinematics not in ("linear", "finite"):
             raise InputError(f'kinematics must be "linear" or "finite", got {self.kinematics!r}')
         if self.kinematics == "linear":
@@ -588,13 +588,15 @@ class Scene:
             parts = shapes_for(exp.indentor)[1]
             sphere = (len(parts) == 1 and isinstance(parts[0], Ellipsoid)
                       and parts[0].semi_u_mm == parts[0].semi_v_mm == parts[0].semi_w_mm)
-            cylinder = len(parts) == 1 and isinstance(parts[0], Cylinder) and not np.isfinite(parts[0].length_mm)
+            long = (len(parts) == 1 and isinstance(parts[0], (Cylinder, Flat))
+                    and not np.isfinite(parts[0].length_mm))
+            punch = len(parts) == 1 and isinstance(parts[0], Punch)
             why = why or (f"experiment '{exp.name}': a time course" if exp.trace is not None else
                           f"experiment '{exp.name}': a sweep" if exp.sweep is not None else
-                          f"experiment '{exp.name}': indentor {exp.indentor}" if not (sphere or cylinder) else None)
+                          f"experiment '{exp.name}': indentor {exp.indentor}" if not (sphere or long or punch) else None)
         if why:
-            raise InputError(f"kinematics = finite runs cylinders (C1-C8, cylinder:<d>) and spheres by depth or force "
-                             f"so far, not {why}: use kinematics = linear for it")
+            raise InputError(f"kinematics = finite runs cylinders (C1-C8, cylinder:<d>), spheres, bars (bar:<w>) and "
+                             f"punches by depth or force so far, not {why}: use kinematics = linear for it")
 
     def check_dim(self, dim: int) -> None:
         """Raise InputError if an experiment cannot run on a model of `dim` (`Experiment.check_dim`)."""
