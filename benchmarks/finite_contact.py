@@ -1,12 +1,12 @@
 #!/usr/bin/env python
-"""When is linear contact enough? Cylinders and a sphere pressed into the fingertip with linear
+"""When is linear contact enough? Cylinders, a bar and a sphere pressed into the fingertip with linear
 kinematics (fem.contact.linear: small strain, gap along the approach) and with finite kinematics
 (fem.contact.finite: neo-Hookean layers, gap by normal projection in the deformed configuration),
 depth by depth: the force ratio finite / linear, where it first differs by 5 %, the work against
 the stored energy (frictionless contact stores the indentor's work), the largest penetration and
 the run time. Models: the five-layer 2D monkey section (z = 5 mm, 0.25 mm elements, m43338; the
-thesis's cylinders C1, C5, C8 to 2 mm) and, with --3d, the 1 mm monkey preset (a 3 mm sphere to
-0.5 mm).
+thesis's cylinders C1, C5, C8 and a 2 mm bar to 2 mm) and, with --3d, the 1 mm monkey preset (a
+3 mm sphere to 0.5 mm).
 
     python benchmarks/finite_contact.py [--3d] [--work out/finite_bench] [--no-write]
 
@@ -32,7 +32,7 @@ from fem.geometry.build import MeshSpec, build_folder  # noqa: E402
 from fem.io.modelfolder import CONTACT_REGION, factorise, held_regions, read_model  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results" / "finite_contact.md"
-CASES_2D = (("C1", np.arange(0.25, 2.01, 0.25)), ("C5", np.arange(0.25, 2.01, 0.25)), ("C8", np.arange(0.25, 2.01, 0.25)))
+CASES_2D = tuple((code, np.arange(0.25, 2.01, 0.25)) for code in ("C1", "C5", "C8", "bar:2"))
 CASES_3D = (("sphere:3", np.arange(0.1, 0.51, 0.1)),)
 
 
