@@ -57,6 +57,18 @@ def fe_facets(model, region: str, sn) -> tuple[np.ndarray, np.ndarray]:
     return facets, facet_shares(facets, size, model.dim)
 
 
+EDGES = np.array([(0, 1), (1, 2), (0, 2)])
+"""The edges of a triangle by its vertices (0, 1, 2)."""
+
+
+def midside_edges(facets, points_mm) -> np.ndarray:
+    """(k, 3) the EDGES row each midside node of the P2 triangles facets (k, 6) (vertices, then
+    midside nodes in any order; indices into points_mm (m, 3)) lies on, matched by position."""
+    x = np.asarray(points_mm, float)[np.asarray(facets)]
+    mid = 0.5 * (x[:, EDGES[:, 0]] + x[:, EDGES[:, 1]])                                  # (k, 3, 3)
+    return np.argmin(np.linalg.norm(x[:, 3:, None] - mid[:, None], axis=-1), axis=2)
+
+
 def node_pairs(facets, points_mm) -> np.ndarray:
     """(p, 2) node pairs (indices into points_mm (m, dim)) that share an edge of a linear sub-facet
     of the facets (k, n): P2, a vertex with the midside nodes of its edges and the midside nodes of
@@ -70,14 +82,11 @@ def node_pairs(facets, points_mm) -> np.ndarray:
     elif dim == 2:                                             # (v0, v1, m): v0-m, m-v1
         pairs = np.vstack([facets[:, [0, 2]], facets[:, [2, 1]]])
     else:                                                      # (v0, v1, v2, three midside nodes)
-        x = np.asarray(points_mm, float)[facets]
-        edges = np.array([(0, 1), (1, 2), (0, 2)])
-        mid = 0.5 * (x[:, edges[:, 0]] + x[:, edges[:, 1]])                          # (k, 3, 3)
-        on = np.argmin(np.linalg.norm(x[:, 3:, None] - mid[:, None], axis=-1), axis=2)  # (k, 3): edge of each
+        on = midside_edges(facets, points_mm)                  # (k, 3): the edge of each
         rows = np.arange(k)
         pairs = [facets[:, [3 + j, 3 + (j + 1) % 3]] for j in range(3)]             # the midside ring
         for j in range(3):
-            a, b = edges[on[:, j]].T
+            a, b = EDGES[on[:, j]].T
             pairs += [np.column_stack([facets[rows, a], facets[:, 3 + j]]),
                       np.column_stack([facets[rows, b], facets[:, 3 + j]])]
         pairs = np.vstack(pairs)

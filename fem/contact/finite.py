@@ -127,29 +127,15 @@ class FiniteContact:
     def __init__(self, model, region: str, held: dict, tol_mm: float = GAP_TOL_MM, tol: float = 1e-10):
         self.model, self.nh, self.tol_mm, self.tol = model, NeoHookean(model), tol_mm, tol
         self.sn = model.surface_nodes(region)
-        system = model.system(held)
-        self.fixed = system.fixed
-        if np.any(system.values):
+        self.fixed, values = model.discretisation.constraints(held, model.material.rigid)   # no factorisation
+        if np.any(values):
             raise InputError("finite contact holds its fixed regions at zero displacement")
+        model.discretisation.check_held(self.fixed)
         self.free = np.setdiff1d(np.arange(model.ndof), self.fixed)
         self.stopped = None                # why the last `indent` ended early (partial=True)
         self.dofs = self.sn.dofs                                   # (m, dim)
         self.X = np.zeros((len(self.dofs), 3))
         self.X[:, :model.dim] = self.sn.x
-
-    def energy(self, u) -> float:
-        """Stored energy [N mm; N mm per mm in 2D] of displacement u: int mu / 2 (J^(-2/d) I1 - d)
-        + g^T D^-1 g / 2 with g_c = int q_c (J - 1) (the mixed energy with the pressure eliminated)."""
-        nh, d = self.nh, self.model.dim
-        w, g = 0.0, np.zeros(nh.npres)
-        for c in nh._chunks():
-            F = nh.deformation_gradient(u, c)
-            J = np.linalg.det(F)
-            I1 = np.einsum("eqij,eqij->eq", F, F)
-            w += float(np.sum(0.5 * nh.mu[c, None] * (J ** (-2.0 / d) * I1 - d) * nh.dx[c]))
-            g += np.bincount(nh.pdofs[c].ravel(), np.einsum("eqc,eq->ec", nh.q[c], nh.dx[c] * (J - 1.0)).ravel(),
-                             minlength=nh.npres)
-        return w + 0.5 * float(g @ (g / nh.D))
 
     def observe(self, u, sampler) -> np.ndarray:
         """Receptor values of displacement u at a fem.receptors.grid.ReceptorSampler's points, in
@@ -277,7 +263,7 @@ class FiniteContact:
         g, n, _ = surf.distance(self._positions(u), travel)
         force = float(np.sum(lam * (n @ surf.approach)))
         J = self.nh.jacobian(u)
-        return FiniteResult(float(depth), force, u.copy(), lam.copy(), g, n, self.energy(u),
+        return FiniteResult(float(depth), force, u.copy(), lam.copy(), g, n, self.nh.stored_energy(u),
                             float(max(0.0, -g.min())), float(J.min()), iterations)
 
     def _solve(self, K, G, C, rhs, gap):
@@ -302,19 +288,12 @@ class FiniteContact:
             g, n, curv = surf.distance(self._positions(u), travel)
             act = np.flatnonzero(active)
             # contact curvature -lambda k (I - n n^T) on the active nodes' DOF blocks
-            rows, cols, vals = [], [], []
-            for i in act:
-                if lam[i] <= 0 or curv[i] == 0:
-                    continue
-                nn = n[i, :dim]
-                H = -lam[i] * curv[i] * (np.eye(dim) - np.outer(nn, nn))
-                d = self.dofs[i]
-                rows.append(np.repeat(d, dim))
-                cols.append(np.tile(d, dim))
-                vals.append(H.ravel())
-            if rows:
-                K = K + sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                                      shape=K.shape)
+            bent = act[(lam[act] > 0) & (curv[act] != 0)]
+            nn = n[bent, :dim]
+            H = -(lam[bent] * curv[bent])[:, None, None] * (np.eye(dim) - nn[:, :, None] * nn[:, None, :])
+            d = self.dofs[bent]
+            K = K + sp.csr_matrix((H.ravel(), (np.repeat(d, dim, axis=1).ravel(), np.tile(d, (1, dim)).ravel())),
+                                  shape=K.shape)
             C = sp.csr_matrix((n[act, :dim].ravel(), (np.repeat(np.arange(len(act)), dim), self.dofs[act].ravel())),
                               shape=(len(act), self.model.ndof))
             r = f - C.T @ lam[act]

@@ -155,6 +155,18 @@ class NeoHookean:
         G = quad(J * w, self.q[cells], Y)                                                     # (M, nc, nb*d)
         return r, k, G
 
+    def stored_energy(self, u) -> float:
+        """Stored energy [N mm; N mm per mm in 2D] of displacement u: int mu / 2 (J^(-2/d) I1 - d)
+        + p^T D p / 2 with p = D^-1 g (`pressure`): the mixed energy with the pressure eliminated,
+        whose derivative is `internal_force`."""
+        d, w = self.dim, 0.0
+        for c in self._chunks():
+            F = self.deformation_gradient(u, c)
+            I1 = np.einsum("eqij,eqij->eq", F, F)
+            w += float(np.sum(0.5 * self.mu[c, None] * (np.linalg.det(F) ** (-2.0 / d) * I1 - d) * self.dx[c]))
+        p = self.pressure(u)
+        return w + 0.5 * float(p @ (p * self.D))
+
     def internal_force(self, u) -> np.ndarray:
         """(ndof,) internal nodal forces [N; N/mm in 2D] of displacement u (the residual with no load)."""
         p_nodes = self.pressure(u)

@@ -106,21 +106,16 @@ def fine_loads(exp, law=None) -> np.ndarray:
     return x
 
 
-def stepped_inputs(model, population: Population, run) -> np.ndarray:
-    """(n, k) static input (-n.sigma.n, MPa) of a population through a course stepped in time
-    (fem.experiments.stepping): each layer group's elastic stress at the afferents relaxed by its
-    own law over the sample times, summed."""
-    def stress_rows(m):
-        s = sampler_of(m, population)
-        return s.operator[int(sum(s.sizes[:-1])):]
+def stepped_inputs(model, population: Population, run, sampler) -> np.ndarray:
+    """(n, k) static input (-n.sigma.n, MPa) of a population (its `sampler_of`) through a course
+    stepped in time (fem.experiments.stepping): each layer group's elastic stress at the
+    afferents relaxed by its own law over the sample times, summed."""
     times = run.experiment.times_s
-    sigma = sum(v if law is None else law.relax(times, v.T).T
-                for law, v in run.stepped.group_values(model, stress_rows))      # (n * ncomp, k)
-    base = sampler_of(model, population)
-    rows = base.operator @ run.stepped.displacement_mm
-    rows[int(sum(base.sizes[:-1])):] = sigma
-    return np.stack([-np.einsum("ni,nij,nj->n", population.normal, base.state(rows[:, j]).stress, population.normal)
-                     for j in range(len(times))], axis=1)
+    groups = run.stepped.group_values(model, lambda m: m.stress_operator(sampler.points_mm))
+    rows = sampler.operator @ run.stepped.displacement_mm
+    rows[sampler.stress_rows] = sum(v if law is None else law.relax(times, v.T).T for law, v in groups)
+    return np.stack([-np.einsum("ni,nij,nj->n", population.normal, sampler.state(rows[:, j]).stress,
+                                population.normal) for j in range(len(times))], axis=1)
 
 
 def scene_responses(scene_run) -> tuple[Population | None, dict]:
@@ -142,13 +137,12 @@ def scene_responses(scene_run) -> tuple[Population | None, dict]:
         exp = run.experiment
         if exp.times_s is None:
             continue
-        if run.stepped is not None:       # layers with their own spectra: the path matters
-            static = stepped_inputs(model, pop, run)
-            deflection = np.stack([pop.at_sites(r.deflection_mm) for _, r in run.steps], axis=1)
-            out[run.name] = respond(pop, exp.times_s, static, deflection, cfg.gain, cfg.noisy, cfg.seed)
-            continue
-        if exp.sweep is not None:         # a scan: the inputs depend on the position, not on a load
-            static, deflection = experiment_inputs(sampler, pop, scene_run.contact, run, cfg.input)
+        if run.stepped is not None or exp.sweep is not None:    # the inputs depend on the path
+            if run.stepped is not None:   # layers with their own spectra
+                static = stepped_inputs(model, pop, run, sampler)
+                deflection = np.stack([pop.at_sites(r.deflection_mm) for _, r in run.steps], axis=1)
+            else:                         # a scan: on the position, not on a load
+                static, deflection = experiment_inputs(sampler, pop, scene_run.contact, run, cfg.input)
             out[run.name] = respond(pop, exp.times_s, static, deflection, cfg.gain, cfg.noisy, cfg.seed)
             continue
         table = tabulate(sampler, pop, scene_run.contact, run, cfg.input, law)

@@ -33,7 +33,6 @@ from fem.contact.linear import ContactModel
 from fem.core.materials import FLUID_LAYER, Material
 from fem.core.viscoelastic import StepHistory
 from fem.io.modelfolder import CONTACT_REGION, factorise
-from fem.receptors.grid import ReceptorSampler
 from fingertip.errors import InputError
 
 METHOD = ("time stepping (a relaxation function per layer; exponential integrator, the input linear over each "
@@ -56,11 +55,25 @@ class Stepped:
     displacement_mm: np.ndarray
 
     def group_values(self, model, operator_of) -> list:
-        """[(law, values (r, k))] of a linear operator of the elastic fields, per group:
-        operator_of(model) -> sparse (r, ndof) (e.g. a stress operator), the group's part the
-        difference between its model and the base `model`."""
-        base = operator_of(model)
-        return [(law, (operator_of(m) - base) @ self.displacement_mm) for law, _, m in self.groups]
+        """[(law, values (r, k))] of a linear operator of the elastic fields at the sample times,
+        per group (`group_operators`)."""
+        return [(law, op @ self.displacement_mm)
+                for (law, _, _), op in zip(self.groups, group_operators(model, self.groups, operator_of))]
+
+
+def group_operators(model, groups, operator_of) -> list:
+    """[sparse (r, ndof)] each group's part of a linear operator of the elastic fields:
+    operator_of(model) -> sparse (r, ndof) (e.g. a stress operator), the group's part the
+    difference between its model (its layers at twice their moduli) and the base `model`."""
+    base = operator_of(model)
+    return [(operator_of(m) - base).tocsr() for _, _, m in groups]
+
+
+def _scaled(model, scale: dict):
+    """The model with layer k's modulus times scale[k] (1 for the layers not named), nu as it is."""
+    mat = model.material
+    return model.with_material(Material({k: v * scale.get(k, 1.0) for k, v in mat.E_MPa.items()}, dict(mat.nu),
+                                        rigid=mat.rigid))
 
 
 def group_models(model, laws) -> list:
@@ -69,12 +82,7 @@ def group_models(model, laws) -> list:
     if FLUID_LAYER in layers:
         raise InputError("[viscoelastic] layers with their own spectra: this model has a fluid core, which has "
                          "no shear modulus to relax; give every layer the same law")
-    mat = model.material
-    out = []
-    for law, ids in laws.groups(layers):
-        E = {k: v * (2.0 if k in ids else 1.0) for k, v in mat.E_MPa.items()}
-        out.append((law, ids, model.with_material(Material(E, dict(mat.nu), rigid=mat.rigid))))
-    return out
+    return [(law, ids, _scaled(model, dict.fromkeys(ids, 2.0))) for law, ids in laws.groups(layers)]
 
 
 def _finished(where: str, indentor, cm, comp, res, u, observed):
@@ -104,14 +112,11 @@ def stepped_course(model, info, run, laws, sampler, candidates, progress=None):
     lengths, counts = np.unique(np.round(dts[dts > 0], 12), return_counts=True)
     dt_star = float(lengths[np.argmax(counts)]) if lengths.size else 0.0
     alpha_star = [h.alpha(dt_star) for h in histories]
-    scale = {layer: a for a, (_, ids, _) in zip(alpha_star, groups) for layer in ids}
-    mat = model.material
-    star = model.with_material(Material({k: v * scale.get(k, 1.0) for k, v in mat.E_MPa.items()}, dict(mat.nu),
-                                         rigid=mat.rigid))
+    star = _scaled(model, {layer: a for a, (_, ids, _) in zip(alpha_star, groups) for layer in ids})
     system = factorise(star, info, candidates, progress)
     cm = ContactModel.from_fe(star, system, CONTACT_REGION[model.dim])
     comp = cm.compliance(run.indentor.approach)
-    reach = np.flatnonzero(getattr(comp, "reach", np.ones(comp.m, bool)))
+    reach = np.flatnonzero(comp.reach)
     # the preload of the candidates that can touch: Z^T r with Z = K_a*^-1 B (one solve, r columns)
     Z = system.solve(np.asfortranarray(comp.B[:, reach].toarray())) if len(reach) <= MAX_PRELOAD_COLUMNS else None
     relaxing = [g for g, (law, _, _) in enumerate(groups) if law is not None]
@@ -121,9 +126,8 @@ def stepped_course(model, info, run, laws, sampler, candidates, progress=None):
         Ku = model.K @ u
         return {g: groups[g][2].K @ u - Ku for g in relaxing}
 
-    stress = slice(int(sum(sampler.sizes[:-1])), None)
-    stress_ops = [(ReceptorSampler(m, sampler.grid).operator[stress] - sampler.operator[stress]).tocsr()
-                  for _, _, m in groups]
+    stress = sampler.stress_rows
+    stress_ops = group_operators(model, groups, lambda m: m.stress_operator(sampler.points_mm))
     stress_hist = [StepHistory(law, stress_ops[0].shape[0]) for law, _, _ in groups]
 
     u = np.zeros(model.ndof)

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fem.contact.facets import fe_facets
+from fem.contact.facets import fe_facets, midside_edges
 from fem.io.modelfolder import CONTACT_REGION, pad_nodes
 from fem.receptors.grid import ReceptorGrid, ReceptorSampler
 from fem.receptors.transduction import (
@@ -41,7 +41,6 @@ from fem.receptors.transduction import (
     spike_trains,
 )
 from fingertip.errors import InputError
-
 
 MAX_SITE_DISTANCE_MM = 1.0
 """An explicit afferent site may lie at most this far from the pad surface it is projected onto."""
@@ -80,14 +79,13 @@ class Population:
 
 def pad_facets(model, surface, centre_mm=None, radius_mm=None) -> tuple[np.ndarray, np.ndarray]:
     """(facets (k, 6) candidate indices: the vertices, then the midside nodes of edges 01, 12 and
-    20; area_mm2 (k,)) of the pad's surface facets (every vertex a `pad_nodes` node; with radius_mm,
+    02 (`fem.contact.facets.EDGES`); area_mm2 (k,)) of the pad's surface facets (every vertex a `pad_nodes` node; with radius_mm,
     centroid within radius_mm of centre_mm (3,))."""
     facets, shares = fe_facets(model, CONTACT_REGION[3], surface)
     x = surface.x
-    if facets.shape[1] == 6:          # midside nodes in the order of the edges, matched by position
-        mid = 0.5 * (x[facets[:, [0, 1, 2]]] + x[facets[:, [1, 2, 0]]])                 # (k, 3, 3)
-        gap = np.linalg.norm(mid[:, :, None] - x[facets[:, 3:]][:, None], axis=-1)      # (k, edge, node)
-        facets = np.c_[facets[:, :3], np.take_along_axis(facets[:, 3:], gap.argmin(axis=2), axis=1)]
+    if facets.shape[1] == 6:          # midside nodes in the order of the edges
+        order = np.argsort(midside_edges(facets, x), axis=1)
+        facets = np.c_[facets[:, :3], np.take_along_axis(facets[:, 3:], order, axis=1)]
     ok = pad_nodes(model, surface)[facets[:, :3]].all(axis=1)
     if radius_mm is not None:
         ok &= np.linalg.norm(x[facets[:, :3]].mean(axis=1) - np.asarray(centre_mm, float), axis=1) <= radius_mm
@@ -99,7 +97,7 @@ def _shape(lam, nodes: int) -> np.ndarray:
     if nodes == 3:
         return lam
     l0, l1, l2 = lam.T
-    return np.c_[lam * (2 * lam - 1), 4 * l0 * l1, 4 * l1 * l2, 4 * l2 * l0]
+    return np.c_[lam * (2 * lam - 1), 4 * l0 * l1, 4 * l1 * l2, 4 * l0 * l2]
 
 
 def _sites(surface, facets, face, lam) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

@@ -101,6 +101,12 @@ class ReceptorSampler:
         self.operator = None
         return self
 
+    @property
+    def stress_rows(self) -> slice:
+        """The rows of `operator` (and of its output) that hold the stress block."""
+        start = self.sizes[0] + self.sizes[1]
+        return slice(start, start + self.sizes[2])
+
     def with_energy(self) -> "ReceptorSampler":
         """This sampler reading a fourth block of values, the stored energy per reference volume
         (n,) of finite kinematics (`fem.contact.finite.FiniteContact.observe`)."""

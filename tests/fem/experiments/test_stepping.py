@@ -117,7 +117,7 @@ def test_afferent_inputs_of_a_stepped_course(shop):
     steps, _, stepped = stepped_course(model, info, dataclasses.replace(e, steps=[]), LayerLaws(scene.viscoelastic),
                                        corr.sampler, corr.surface.nodes)
     run = dataclasses.replace(e, steps=steps, stepped=stepped)
-    got = stepped_inputs(model, pop, run)
+    got = stepped_inputs(model, pop, run, sampler_of(model, pop))
     elastic = site_inputs(sampler_of(model, pop), pop, corr.contact.compliance(e.indentor.approach),
                           np.stack([r.elastic_force_N for _, r in e.steps], axis=1))
     want = scene.viscoelastic.relax(e.experiment.times_s, elastic.T).T
