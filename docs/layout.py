@@ -33,6 +33,7 @@ LAYERS = [
     [("fem.biomech", ["fem.biomech"], "deflection, layer study, fits, line load")],
     [("fem.thesis", ["fem.thesis"], "the thesis claim by claim")],
     [("fem.plots", ["fem.plots"], "every figure"), ("fem (the face)", ["fem"], "public API of fem")],
+    [("fingertip.explore", ["fingertip.explore"], "the browser: the live explorer's web app and picture")],
     [("fingertip.jobs", ["fingertip.jobs"], "one job per command: run, write the folder, summary")],
     [("fingertip.cli", ["fingertip.cli"], "the command line: words -> objects -> job -> printed summary")],
     [("pipeline.py", ["pipeline"], "python pipeline.py = fingertip")],

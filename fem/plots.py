@@ -531,3 +531,34 @@ def finding_figure(finding) -> Figure:
 def _has_colour(style: str) -> bool:
     """Whether a matplotlib format string names a colour ('k:', 'r-')."""
     return any(ch in "bgrcmykw" for ch in style)
+
+
+def receptor_map_figure(x_mm, y_mm, values, measure: str, depth_mm: float, dim: int = 3) -> Figure:
+    """The explorer's receptor map: one measure at the receptor points of one depth, x_mm, y_mm
+    (n,) their positions in the map's plane (3D: x and z across the pad; 2D: x and y of the
+    section), values (n,). Fixed margins (the figure is redrawn with new values, its tick labels
+    plain numbers of at most 4 digits)."""
+    fig = Figure(figsize=(4.4, 2.9))
+    fig.subplots_adjust(left=0.12, right=0.8, bottom=0.16, top=0.9)
+    ax = fig.subplots()
+    art = ax.scatter(x_mm, y_mm, c=values, s=18, cmap="viridis")
+    bar = fig.colorbar(art, ax=ax, label=axis_label(measure, dim), fraction=0.08, pad=0.03)
+    bar.formatter = FuncFormatter(lambda v, _: f"{v:.3g}")
+    ax.set(xlabel="x, mm", ylabel="z, mm" if dim == 3 else "y, mm", aspect="equal")
+    ax.set_title(f"receptors {depth_mm:g} mm deep", fontsize=9)
+    return fig
+
+
+def explorer_profile_figure(along_mm, deflection_mm, pressure_MPa, xlabel: str) -> Figure:
+    """The explorer's surface profile: deflection (down negative) and contact pressure of the
+    surface nodes along_mm (n,), as points (in 3D a band of nodes, whose distances differ). Fixed
+    margins, as `receptor_map_figure`."""
+    fig = Figure(figsize=(4.4, 2.9))
+    fig.subplots_adjust(left=0.2, right=0.97, bottom=0.16, top=0.96, hspace=0.12)
+    ax = fig.subplots(2, 1, sharex=True)
+    ax[0].plot(along_mm, -np.asarray(deflection_mm), ".", ms=3)
+    ax[0].set_ylabel("deflection, mm", fontsize=8)
+    ax[1].plot(along_mm, pressure_MPa, ".", ms=3, color="C3")
+    ax[1].set(xlabel=xlabel)
+    ax[1].set_ylabel("pressure, MPa", fontsize=8)
+    return fig

@@ -32,6 +32,8 @@ COMMANDS = {
                 "response) so later indent commands answer without factorising"),
     "indent": ("indent", "add_indent", "rigid indentors on a meshed model: depth or force control, sweeps -> CSV, "
                "PNG, PVD"),
+    "explore": ("explore", "add_explore", "the live explorer in the browser: move an indentor over the pad and see "
+                "pressure, deflection and receptor measures follow (optional extra 'explore')"),
     "study-layers": ("biomech", "add_study_layers", "layer-stiffness study (thesis fig. 6-10): deflection profiles "
                      "under a line load with each layer's modulus varied by powers of ten"),
     "fit-material": ("biomech", "add_fit_material", "fit layer moduli to measured deflection profiles (ratios) and "
