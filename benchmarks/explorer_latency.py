@@ -37,7 +37,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
-from tests.fingertip.explore.test_explore import _browser  # noqa: E402
+from tests.helpers import headless_chromium  # noqa: E402
 
 
 def run(*argv, cwd=ROOT) -> tuple[float, float]:
@@ -66,7 +66,7 @@ def measure(model: Path, changes: int, shot: Path) -> dict:
     browser = None
     try:
         assert "http://" in server.stdout.readline()
-        browser = _browser()
+        browser = headless_chromium()
         browser.get(f"http://127.0.0.1:{port}/")
 
         def text(ident):

@@ -209,7 +209,8 @@ def indent_figures(run, scene_run, tables) -> dict[str, Figure]:
                 o = np.argsort(coord[g.site[sel]])
                 curves[m].append((f"{d:g} mm", coord[g.site[sel]][o], tables["values"][m][j][sel][o], ".-"))
     xlabel = KEY_LABELS[key] if sweep else xlabel
-    figures[f"{name}_receptors.png"] = indent_receptors_figure(curves, xlabel, _receptor_title(run, sweep, j, dim))
+    if curves:                            # a scene may ask for no receptor measures
+        figures[f"{name}_receptors.png"] = indent_receptors_figure(curves, xlabel, _receptor_title(run, sweep, j, dim))
     if scene_run.model.dim == 3:          # contact pressure map of the judged indentation
         r = steps[j][1]
         figures[f"{name}_pressure.png"] = indent_pressure_figure(name, u, v, r.pressure_MPa, r.depth_mm.max())

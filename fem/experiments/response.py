@@ -37,6 +37,7 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
+import os
 import shutil
 import time
 from dataclasses import dataclass
@@ -59,6 +60,9 @@ RESPONSE_FORMAT = 2
 """Version of the stored layout and of what the key covers (raise it when either changes)."""
 BLOCK = 64
 """Right-hand sides per solve when R and W are built."""
+STORE_MAX_BYTES = 3 * 2**30
+"""A model folder's response store keeps at most this many bytes: saving a model removes the
+models used least recently (by their last load or save) until the rest fit."""
 
 
 # --------------------------------------------------------------------------- key
@@ -191,9 +195,8 @@ class ResponseStore:
 
     @classmethod
     def existing(cls, model_dir) -> ResponseStore | None:
-        """The store of a model folder that keeps response models (`prepare_responses` or an
-        earlier scene made it), else None: a first run factorises, which costs less than building
-        one (a solve per condensed candidate)."""
+        """The store of a model folder that already keeps response models, else None (for a model
+        folder that cannot be written: it is read, never built)."""
         store = cls(model_dir)
         return store if store.folder.is_dir() else None
 
@@ -250,6 +253,10 @@ class ResponseStore:
             logger.warning(f"stored response model {folder} is unreadable ({exc}): removed, it will be rebuilt")
             shutil.rmtree(folder, ignore_errors=True)
             return None
+        try:
+            os.utime(folder / "response.json")          # its last use, for the store's size cap
+        except OSError:
+            pass                                        # a read-only store keeps no record
         return ResponseModel(key, np.asarray(meta["approach"], float), np.asarray(reach), WT, RT,
                              np.asarray(shift), float(meta["build_seconds"]), int(meta["bytes"]))
 
@@ -265,7 +272,28 @@ class ResponseStore:
                 "shape_WT": list(rm.WT.shape), "shape_RT": list(rm.RT.shape),
                 "receptor_points": len(rm.shift_mm), "build_seconds": rm.build_seconds, "bytes": rm.nbytes})
         self._remember()
+        self._evict(keep=rm.key)
         return rm
+
+    def _evict(self, keep: str) -> None:
+        """Remove the models used least recently (response.json's modification time, which `load`
+        touches) but `keep` until the store holds at most STORE_MAX_BYTES."""
+        models = []
+        for folder in self.folder.iterdir():
+            try:
+                meta = folder / "response.json"
+                models.append((meta.stat().st_mtime_ns, folder.name, int(json.loads(meta.read_text())["bytes"])))
+            except (OSError, ValueError, KeyError, TypeError):
+                continue
+        total = sum(size for _, _, size in models)
+        for _, key, size in sorted(models):
+            if total <= STORE_MAX_BYTES:
+                break
+            if key != keep:
+                logger.warning(f"response store of {self.folder.parent} over {STORE_MAX_BYTES / 2**30:g} GiB: "
+                               f"removing the model used least recently ({key[:12]}, {size / 2**20:.0f} MB)")
+                shutil.rmtree(self.path(key), ignore_errors=True)
+                total -= size
 
 
 # --------------------------------------------------------------------------- contact
@@ -359,8 +387,6 @@ def stored_responses(store: ResponseStore, model, approaches, grid, touched, pro
             used.append((key, "built", rm.build_seconds, rm.nbytes))
         else:
             used.append((key, "stored", rm.build_seconds, rm.nbytes))
-        progress.note(f"response model: {used[-1][1]} {key[:12]} ({rm.nbytes / 2**20:.1f} MB, "
-                      f"{rm.WT.shape[0]} condensed candidates, built in {rm.build_seconds:.2f} s)")
         out[ak] = rm
     if sampler is None:
         sampler = ReceptorSampler.without_operator(model.dim, grid, next(iter(out.values())).shift_mm)

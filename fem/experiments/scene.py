@@ -11,7 +11,7 @@
     line = ["z", "middle"]               # receptors on a line only: [axis, mm or "middle"]
     measures = ["sed_MPa", ...]          # fem.core.measures names
     [output]                             # optional
-    pvd = true                           # full fields per indentation (default: up to 20 of them)
+    pvd = true                           # full fields per indentation (default false: they factorise)
     plots = true
     [[experiment]]                       # one or more
     name = "C5"
@@ -285,8 +285,7 @@ class Receptors:
 @dataclass(frozen=True)
 class Output:
     """[output]: optional files of the run folder."""
-    pvd: bool | None = _key("", _boolean, None, "full fields per indentation as a PVD series",
-                            default_text="on up to 20 indentations")
+    pvd: bool = _key("", _boolean, False, "full fields per indentation as a PVD series (factorises the model)")
     plots: bool = _key("", _boolean, True, "PNG figures per experiment")
 
     @classmethod

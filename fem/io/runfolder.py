@@ -159,13 +159,11 @@ def write_afferents(folder, resp) -> dict:
 
 
 # --------------------------------------------------------------------------- writer
-PVD_DEFAULT_MAX = 20
-"""An experiment writes a PVD series by default when it has at most this many indentations."""
-
 def writes_pvd(output, indentations: int) -> bool:
     """Whether an experiment of `indentations` indentations writes a PVD series under a scene's
-    `output` (fem.experiments.scene.Output: pvd true, false, or None for the default)."""
-    return bool(output.pvd) if output.pvd is not None else indentations <= PVD_DEFAULT_MAX
+    `output` (fem.experiments.scene.Output): only when asked (pvd = true, --pvd), since full fields
+    need the factorised model and everything else is answered by the stored response model."""
+    return bool(output.pvd) and indentations > 0
 
 
 def write_run(folder, model_dir, scene_run, afferents=(None, {}), progress=None) -> dict[str, dict]:

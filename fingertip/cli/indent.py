@@ -3,6 +3,7 @@ stored response model). The experiment, receptor, material and output flags are 
 scene schema (`fem.experiments.scene`: Experiment, Receptors, Scene, Output)."""
 from __future__ import annotations
 
+import argparse
 import dataclasses
 from pathlib import Path
 
@@ -70,7 +71,8 @@ def add_indent(p):
     add_declared(load, Experiment, ("depth_mm", "force_N"))
     add_declared(p, Experiment, EXPERIMENT_FLAGS)
     add_material_and_receptors(p)
-    add_declared(p, Output, OUTPUT_FLAGS, defaults={"plots": "the scene's, on"})
+    add_declared(p, Output, OUTPUT_FLAGS, defaults={"plots": "the scene's, on", "pvd": "the scene's, off"},
+                 pvd={"action": argparse.BooleanOptionalAction})       # --no-pvd overrides a scene's pvd = true
     add_declared(p, Scene, ("max_indentations",), defaults={"max_indentations": "the scene's, 10000"})
     add_declared(p, Scene, ("kinematics",), defaults={"kinematics": "the scene's, linear"})
     p.add_argument("--out", help="output folder (default: <model>/indent_<indentor or scene file stem>)")

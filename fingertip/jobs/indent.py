@@ -7,6 +7,7 @@ response model. Each returns the summary text the command line prints.
 from __future__ import annotations
 
 import logging
+import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -57,7 +58,7 @@ def run_indent(model_dir, out_dir, scene: Scene, progress=True, scheduler=None) 
     progress = as_progress(progress)
     with claimed(out_dir):
         with task_map(sched, "experiment", progress) as map_:
-            run = run_scene(model_dir, scene, store=ResponseStore.existing(model_dir), map=map_, progress=progress)
+            run = run_scene(model_dir, scene, store=response_store(model_dir), map=map_, progress=progress)
         for warning in run.warnings:
             logger.warning(warning)
         tables = _write(out_dir, model_dir, scene, run, progress)
@@ -71,6 +72,12 @@ def run_indent(model_dir, out_dir, scene: Scene, progress=True, scheduler=None) 
     lines += [f"  response model: {how} {key} ({size / 2**20:.1f} MB, built in {built:.2f} s)"
               for key, how, built, size in run.responses]
     return Indented("\n".join(lines), tables)
+
+
+def response_store(model_dir) -> ResponseStore | None:
+    """The store `indent` answers from: the model folder's, built on the first run and kept for the
+    next (a read-only model folder: its existing store, if any, else None: factorised)."""
+    return ResponseStore(model_dir) if os.access(model_dir, os.W_OK) else ResponseStore.existing(model_dir)
 
 
 def _write(out_dir, model_dir, scene: Scene, run, progress) -> dict:

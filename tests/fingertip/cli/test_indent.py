@@ -11,7 +11,7 @@ from tests.helpers import ROOT, csv_rows
 
 def test_depth_series_outputs(cyl8, tmp_path):
     out = tmp_path / "c5"
-    assert pipeline.main(["indent", str(cyl8), "--indentor", "C5", "--depth", "0.25:1:0.25",
+    assert pipeline.main(["indent", str(cyl8), "--indentor", "C5", "--depth", "0.25:1:0.25", "--pvd",
                           "--out", str(out), "--quiet"]) == 0
     rows = csv_rows(out / "C5.csv")
     depth = [float(r["depth_mm"]) for r in rows]
@@ -34,6 +34,7 @@ def test_scene_with_force_control_and_sweep(cyl8, tmp_path):
     scene.write_text('[receptors]\ndepths_mm = [0.75]\nspacing_mm = 0.5\n\n'
                      '[[experiment]]\nname = "bar"\nindentor = "bar:1.5"\nforce_N = 0.002\n'
                      'sweep = "x=-1:1:0.5"\n')
+    before = sorted((cyl8 / "response").iterdir()) if (cyl8 / "response").is_dir() else []
     out = tmp_path / "s"
     assert pipeline.main(["indent", str(cyl8), "--scene", str(scene), "--out", str(out), "--quiet"]) == 0
     rows = csv_rows(out / "bar.csv")
@@ -41,7 +42,8 @@ def test_scene_with_force_control_and_sweep(cyl8, tmp_path):
     np.testing.assert_allclose([float(r["force_N"]) for r in rows], 0.002, rtol=1e-5)
     d = [float(r["depth_mm"]) for r in rows]
     assert abs(d[0] - d[-1]) < 0.02 * d[2]                                # symmetric model
-    assert (out / "bar.pvd").is_file() and (out / "bar_004.vtu").is_file()   # PVD up to 20 steps
+    assert not list(out.glob("*.pvd"))                                     # PVD only when asked
+    assert len(sorted((cyl8 / "response").iterdir())) > len(before)         # the store was built
 
 
 @pytest.mark.parametrize("args, message", [
@@ -227,9 +229,9 @@ def test_rerun_replaces_the_run_folder_as_a_whole(cyl8, tmp_path, capsys):
     a folder holding other files is refused, and a mesh folder keeps what else it holds."""
     out = tmp_path / "run"
     args = ["indent", str(cyl8), "--indentor", "C5", "--out", str(out), "--quiet"]
-    assert pipeline.main([*args, "--depth", "0.5:2:0.5"]) == 0
+    assert pipeline.main([*args, "--depth", "0.5:2:0.5", "--pvd"]) == 0
     assert (out / "C5_003.vtu").is_file()
-    assert pipeline.main([*args, "--depth", "0.5", "--no-plots"]) == 0
+    assert pipeline.main([*args, "--depth", "0.5", "--no-plots", "--pvd"]) == 0
     assert sorted(p.name for p in out.iterdir()) == ["C5.csv", "C5.pvd", "C5_000.vtu", "C5_receptors.csv",
                                                      "C5_surface.csv", "run.json"]
     assert len(csv_rows(out / "C5.csv")) == 1

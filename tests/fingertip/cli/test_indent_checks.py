@@ -47,9 +47,10 @@ def test_deep_wedge_inverts_elements_shallow_cylinder_does_not(cyl8, tmp_path):
     """A sharp wedge 2.5 mm into the cylinder with bone (3 mm of tissue over the bone) turns about
     1 % of the elements inside out and strains receptors by more than 1: run.json and the summary
     say so, and the warning is logged; C5 0.25 mm deep stays in the linear range (receptor strains
-    0.1) and says nothing."""
+    0.1) and says nothing. Both with --pvd: the factorised run has the full field the inversion
+    check needs (a stored response model does not: the next test)."""
     deep, shallow = tmp_path / "deep", tmp_path / "shallow"
-    ran = cli("indent", cyl8, "--indentor", "wedge", "--depth", "1,2.5", "--no-plots", "--no-pvd", "--out", deep)
+    ran = cli("indent", cyl8, "--indentor", "wedge", "--depth", "1,2.5", "--no-plots", "--pvd", "--out", deep)
     assert ran.code == 0, ran.err
     v = json.loads((deep / "run.json").read_text())["experiments"][0]["validity"]
     assert v["checked_indentation"] == 1 and v["depth_mm"] == 2.5 and v["inversion_checked"]
@@ -60,7 +61,7 @@ def test_deep_wedge_inverts_elements_shallow_cylinder_does_not(cyl8, tmp_path):
     assert "% of the elements and strains receptors by" in line[0] and "(> 0.2)" in line[0]
     assert line[0].endswith(LARGE_DEFORMATION)
     assert line[0].strip() in ran.err.splitlines()                  # the module logger's line on stderr
-    ran = cli("indent", cyl8, "--indentor", "C5", "--depth", "0.1,0.25", "--no-plots", "--no-pvd", "--out", shallow)
+    ran = cli("indent", cyl8, "--indentor", "C5", "--depth", "0.1,0.25", "--no-plots", "--pvd", "--out", shallow)
     assert ran.code == 0 and "warning" not in ran.out + ran.err
     v = json.loads((shallow / "run.json").read_text())["experiments"][0]["validity"]
     assert v["inverted_elements"] == 0.0 and v["max_receptor_strain"] < 0.2 and v["within_linear_range"]

@@ -20,9 +20,7 @@ from fem.experiments.scene import load_scene
 from fem.io.runfolder import run_tables
 from fingertip.errors import InputError
 from tests.fingertip.cli.test_bad_input import assert_refused
-from tests.helpers import ROOT, cli, snapshot
-
-CHROMIUM, CHROMEDRIVER = Path("/usr/bin/chromium"), Path("/usr/bin/chromedriver")
+from tests.helpers import CHROMEDRIVER, CHROMIUM, ROOT, cli, headless_chromium, snapshot
 
 
 def factorised(model_dir, scene_file):
@@ -93,19 +91,6 @@ def test_without_the_extra_it_says_how_to_install(cyl8, tmp_path, monkeypatch):
     assert_refused(["explore", cyl8], [cyl8, tmp_path], "pip install -e '.[explore]'")
 
 
-def _browser():
-    """Headless Chromium of the system's packages under Selenium."""
-    from selenium import webdriver
-    from selenium.webdriver.chrome.service import Service
-    opts = webdriver.ChromeOptions()
-    opts.binary_location = str(CHROMIUM)
-    for flag in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--no-first-run",
-                 "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                 "--window-size=1400,1000"):
-        opts.add_argument(flag)
-    return webdriver.Chrome(service=Service(str(CHROMEDRIVER)), options=opts)
-
-
 def _wait(what, timeout_s=60.0):
     t0 = time.monotonic()
     while time.monotonic() - t0 < timeout_s:
@@ -137,7 +122,7 @@ def test_the_browser_shows_the_command_lines_force(tmp_path):
     try:
         line = server.stdout.readline()
         assert f"http://127.0.0.1:{port}/" in line, (line, server.stderr.read() if server.poll() is not None else "")
-        browser = _browser()
+        browser = headless_chromium()
         browser.get(f"http://127.0.0.1:{port}/")
 
         def text(ident):
