@@ -285,27 +285,36 @@ def finite_experiments(model, info, scene: Scene, progress, only: int | None = N
         if only is not None and k != only:
             continue
         t0 = time.perf_counter()
-        ind = run.indentor
         exp = run.experiment
-        if exp.force_N is not None:
-            with progress.task(f"{run.name}: finite contact at {exp.force_N:g} N", kind="finite"):
-                results = [fc.indent_force(ind, exp.force_N, exp.loads[0]["max_depth_mm"], progress=progress)]
-        else:
-            with progress.task(f"{run.name}: finite contact to {max(exp.depth_mm):g} mm", kind="finite"):
-                results = fc.indent(ind, exp.depth_mm, progress=progress)
-        first = float(ind.standoff(fc.X).min())
-        for r in results:
-            f = r.contact_force_N * (r.normal @ ind.approach)
-            res = ContactResult(ind.name, np.array([r.depth_mm]), np.array([first + r.depth_mm]), f, r.gap_mm,
-                                r.u[sn.dofs] @ ind.approach[:model.dim], np.zeros(len(f), int),
-                                smoothed_pressure(r.contact_force_N, *facets), sn.area,
-                                kkt_record(r.contact_force_N, r.gap_mm, fc.tol_mm), _observed=fc.observe(r.u, sampler),
-                                stored_energy_Nmm=r.energy_Nmm)
-            res.kkt["iterations"] = r.iterations
-            run.steps.append((np.zeros(3), res))
+        for off in exp.offsets_mm:                # a sweep: each position indented from rest
+            ind = run.indentor if exp.sweep is None else run.indentor.shifted(off)
+            where = "" if exp.sweep is None else f" at offset {np.round(off[exp.sweep[0]], 6):g} mm"
+            if exp.force_N is not None:
+                with progress.task(f"{run.name}: finite contact at {exp.force_N:g} N{where}", kind="finite"):
+                    results = [fc.indent_force(ind, exp.force_N, exp.loads[0]["max_depth_mm"], progress=progress)]
+            else:
+                with progress.task(f"{run.name}: finite contact to {max(exp.depth_mm):g} mm{where}", kind="finite"):
+                    results = fc.indent(ind, exp.depth_mm, progress=progress)
+            run.steps += [(np.asarray(off, float), finite_result(fc, ind, r, sn, facets, sampler)) for r in results]
         run.seconds += time.perf_counter() - t0
     return SceneRun(model, info, scene, None, sn, grid, sampler.with_energy(), list(scene.receptors.measures), line,
                     runs, warnings, [])
+
+
+def finite_result(fc: FiniteContact, ind, r, sn, facets, sampler) -> ContactResult:
+    """A finite-kinematics indentation `r` of `fc` as the ContactResult of the linear path: forces per
+    candidate along the approach, deflection along it, normal gaps, the pressure of the normal
+    forces over the reference areas (nominal), the KKT check, the stored energy and the receptor
+    values of the finite state."""
+    first = float(ind.standoff(fc.X).min())
+    f = r.contact_force_N * (r.normal @ ind.approach)
+    res = ContactResult(ind.name, np.array([r.depth_mm]), np.array([first + r.depth_mm]), f, r.gap_mm,
+                        r.u[sn.dofs] @ ind.approach[:fc.model.dim], np.zeros(len(f), int),
+                        smoothed_pressure(r.contact_force_N, *facets), sn.area,
+                        kkt_record(r.contact_force_N, r.gap_mm, fc.tol_mm), _observed=fc.observe(r.u, sampler),
+                        stored_energy_Nmm=r.energy_Nmm)
+    res.kkt["iterations"] = r.iterations
+    return res
 
 
 def split_laws(law, model):

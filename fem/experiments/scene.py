@@ -530,7 +530,8 @@ class Scene:
     max_indentations: int = _key("", _count, MAX_INDENTATIONS, "most indentations the scene may run (all its "
                                  "experiments together)", text=lambda word: _whole(word, "max_indentations"))
     kinematics: str = _key("", _text, "linear", "linear (small strain) or finite (large deformation: neo-Hookean "
-                           "layers, cylinders and spheres by depth; fem.contact.finite)", text=str)
+                           "layers; cylinders, spheres, bars and punches by depth or force, swept or not; "
+                           "fem.contact.finite)", text=str)
 
     @classmethod
     def from_dict(cls, d, source: str = "scene", max_indentations: int | None = None) -> Scene:
@@ -574,8 +575,8 @@ class Scene:
 
     def check_kinematics(self) -> None:
         """Raise InputError for what finite kinematics does not run yet (fem.contact.finite): time
-        courses, sweeps, indentors other than cylinders, spheres, bars and punches, viscoelastic
-        layers, afferents and PVD output."""
+        courses, indentors other than cylinders, spheres, bars and punches, viscoelastic layers,
+        afferents and PVD output."""
         if self.kinematics not in ("linear", "finite"):
             raise InputError(f'kinematics must be "linear" or "finite", got {self.kinematics!r}')
         if self.kinematics == "linear":
@@ -591,11 +592,11 @@ class Scene:
                     and not np.isfinite(parts[0].length_mm))
             punch = len(parts) == 1 and isinstance(parts[0], Punch)
             why = why or (f"experiment '{exp.name}': a time course" if exp.trace is not None else
-                          f"experiment '{exp.name}': a sweep" if exp.sweep is not None else
                           f"experiment '{exp.name}': indentor {exp.indentor}" if not (sphere or long or punch) else None)
         if why:
             raise InputError(f"kinematics = finite runs cylinders (C1-C8, cylinder:<d>), spheres, bars (bar:<w>) and "
-                             f"punches by depth or force so far, not {why}: use kinematics = linear for it")
+                             f"punches by depth or force, swept or not, so far, not {why}: use kinematics = linear "
+                             f"for it")
 
     def check_dim(self, dim: int) -> None:
         """Raise InputError if an experiment cannot run on a model of `dim` (`Experiment.check_dim`)."""
