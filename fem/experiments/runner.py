@@ -286,6 +286,14 @@ def finite_experiments(model, info, scene: Scene, progress, only: int | None = N
             continue
         t0 = time.perf_counter()
         exp = run.experiment
+        if exp.trace is not None:
+            with progress.task(f"{run.name}: finite contact through its time course", kind="finite"):
+                course = finite_course(fc, run, progress)
+            done = {}                             # a course repeats states (a hold): one result each
+            run.steps = [(off, done[id(r)] if id(r) in done else done.setdefault(
+                id(r), finite_result(fc, run.indentor, r, sn, facets, sampler))) for off, r in course]
+            run.seconds += time.perf_counter() - t0
+            continue
         for off in exp.offsets_mm:                # a sweep: each position indented from rest
             ind = run.indentor if exp.sweep is None else run.indentor.shifted(off)
             where = "" if exp.sweep is None else f" at offset {np.round(off[exp.sweep[0]], 6):g} mm"
@@ -299,6 +307,26 @@ def finite_experiments(model, info, scene: Scene, progress, only: int | None = N
         run.seconds += time.perf_counter() - t0
     return SceneRun(model, info, scene, None, sn, grid, sampler.with_energy(), list(scene.receptors.measures), line,
                     runs, warnings, [])
+
+
+def finite_course(fc: FiniteContact, run: ExperimentRun, progress) -> list:
+    """[(offset (3,), FiniteResult)] of a traced experiment, one per sample: frictionless
+    hyperelastic contact has no memory of its path, so the course's distinct depths are solved
+    once as one increasing series (by force: each distinct force from rest) and read at every
+    sample."""
+    exp, ind = run.experiment, run.indentor
+    samples = exp.indentations
+    if exp.force_N is None:
+        depths = sorted({round(load["depth_mm"], 12) for _, load in samples})
+        at = dict(zip(depths, fc.indent(ind, depths, progress=progress)))
+        return [(off, at[round(load["depth_mm"], 12)]) for off, load in samples]
+    at = {}
+    for _, load in samples:
+        f = round(load.get("force_N", 0.0), 15)
+        if f not in at:
+            at[f] = (fc.indent(ind, [0.0])[0] if f <= 0 else
+                     fc.indent_force(ind, f, exp.loads[0]["max_depth_mm"], progress=progress))
+    return [(off, at[round(load.get("force_N", 0.0), 15)]) for off, load in samples]
 
 
 def finite_result(fc: FiniteContact, ind, r, sn, facets, sampler) -> ContactResult:

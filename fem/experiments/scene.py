@@ -574,9 +574,9 @@ class Scene:
                              f"or raise max_indentations")
 
     def check_kinematics(self) -> None:
-        """Raise InputError for what finite kinematics does not run yet (fem.contact.finite): time
-        courses, indentors other than cylinders, spheres, bars and punches, viscoelastic layers,
-        afferents and PVD output."""
+        """Raise InputError for what finite kinematics does not run yet (fem.contact.finite): scans,
+        indentors other than cylinders, spheres, bars and punches, viscoelastic layers, afferents
+        and PVD output."""
         if self.kinematics not in ("linear", "finite"):
             raise InputError(f'kinematics must be "linear" or "finite", got {self.kinematics!r}')
         if self.kinematics == "linear":
@@ -591,12 +591,12 @@ class Scene:
             long = (len(parts) == 1 and isinstance(parts[0], (Cylinder, Flat))
                     and not np.isfinite(parts[0].length_mm))
             punch = len(parts) == 1 and isinstance(parts[0], Punch)
-            why = why or (f"experiment '{exp.name}': a time course" if exp.trace is not None else
+            why = why or (f"experiment '{exp.name}': a scan" if exp.trace is not None and exp.trace.shape == "scan" else
                           f"experiment '{exp.name}': indentor {exp.indentor}" if not (sphere or long or punch) else None)
         if why:
             raise InputError(f"kinematics = finite runs cylinders (C1-C8, cylinder:<d>), spheres, bars (bar:<w>) and "
-                             f"punches by depth or force, swept or not, so far, not {why}: use kinematics = linear "
-                             f"for it")
+                             f"punches by depth or force, swept or in time, so far, not {why}: use kinematics = "
+                             f"linear for it")
 
     def check_dim(self, dim: int) -> None:
         """Raise InputError if an experiment cannot run on a model of `dim` (`Experiment.check_dim`)."""

@@ -154,3 +154,30 @@ def test_sweep_moves_the_contact_with_the_indentor(section, tmp_path):
     finite, lin = centres(swept), centres(linear)
     assert np.abs(finite - lin).max() < 0.125 and finite[0] < finite[1] < finite[2]
 
+
+
+def test_time_course_reads_one_increasing_series(section, tmp_path):
+    """A finite ramp-and-hold solves its distinct depths once, in order: the hold repeats the end of
+    the ramp, the release passes the ramp's states backwards (no memory of the path), and the full
+    depth's force is the single indentation's to Newton's tolerance."""
+    scene = tmp_path / "rh.toml"
+    scene.write_text('kinematics = "finite"\nmaterial = "m43338"\n[output]\nplots = false\n[[experiment]]\n'
+                     'name = "rh"\nindentor = "C5"\ndepth_mm = 0.3\n[experiment.trace]\nshape = "ramp_hold"\n'
+                     'ramp_s = 0.1\nhold_s = 0.05\nsamples = 12\n')
+    assert pipeline.main(["indent", str(section), "--scene", str(scene), "--out", str(tmp_path / "rh"), "--quiet"]) == 0
+    rows = csv_rows(tmp_path / "rh" / "rh.csv")
+    depth = np.array([float(r["depth_mm"]) for r in rows])
+    force = np.array([float(r["force_N"]) for r in rows])
+    held = depth == depth.max()
+    ramp = np.arange(len(rows)) < np.argmax(held)
+    assert held.sum() >= 2 and np.ptp(force[held]) == 0 and np.all(np.diff(force[ramp]) > 0)
+    for d, f in zip(depth[~held & ~ramp], force[~held & ~ramp]):
+        if np.any(depth[ramp] == d):
+            assert f == force[ramp][depth[ramp] == d][0]
+    single = FiniteContact(*_section_model(section)).indent(make_indentor("C5"), [0.3])[0]
+    assert force[held][0] == pytest.approx(single.force_N, rel=1e-6)
+
+
+def _section_model(section):
+    model, _ = read_model(section, "m43338")
+    return model, CONTACT_REGION[2], held_regions(model)
