@@ -40,6 +40,7 @@ import scipy.sparse as sp
 from fem.contact.indentors import Cylinder, Ellipsoid, Flat, Punch
 from fem.contact.linear import GAP_TOL_MM
 from fem.core.linalg import SaddleFactor
+from fem.core.measures import State, evaluate
 from fem.core.neohookean import NeoHookean
 from fingertip.errors import InputError
 
@@ -145,9 +146,37 @@ class FiniteContact:
         lambda / kappa p, the linear solver's in the small-strain limit) and the stored energy per
         reference volume mu / 2 (J^(-2/d) I1 - d) + p^2 / (2 kappa) (`fem.core.neohookean`'s with
         the pressure eliminated) [MPa]. Each reduces to the linear measure at small strain."""
-        m, d, nh = self.model, self.model.dim, self.nh
         x = sampler.points_mm
-        cells = m.locate(x)
+        disp, E_d, sigma_d, sigma_zz, W = self._state_at(u, x, self.model.locate(x))
+        n, d = len(x), self.model.dim
+        if d == 3:
+            comps = [(0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1)]
+            strain = np.stack([E_d[:, i, j] for i, j in comps], axis=1)
+            stress = np.stack([sigma_d[:, i, j] for i, j in comps], axis=1)
+        else:
+            strain = np.stack([E_d[:, 0, 0], E_d[:, 1, 1], E_d[:, 0, 1]], axis=1)
+            stress = np.stack([sigma_d[:, 0, 0], sigma_d[:, 1, 1], sigma_zz, sigma_d[:, 0, 1]], axis=1)
+        return np.concatenate([disp.reshape(n * d), strain.ravel(), stress.ravel(), W])
+
+    def element_fields(self, u) -> dict[str, np.ndarray]:
+        """{measure name: (M,) value at each element's centroid} of displacement u, every measure of
+        fem.core.measures from the finite state (`observe`'s strain, stress and energy): the cell
+        data of a finite run's VTU files."""
+        m, d = self.model, self.model.dim
+        x = m.mesh.p[:, m.mesh.t].mean(axis=1).T
+        disp, E_d, sigma_d, sigma_zz, W = self._state_at(u, x, np.arange(m.mesh.nelements))
+        n = len(x)
+        disp3, strain, stress = np.zeros((n, 3)), np.zeros((n, 3, 3)), np.zeros((n, 3, 3))
+        disp3[:, :d], strain[:, :d, :d], stress[:, :d, :d] = disp, E_d, sigma_d
+        if d == 2:
+            stress[:, 2, 2] = sigma_zz
+        return evaluate(None, State(disp3, strain, stress, W))
+
+    def _state_at(self, u, x, cells) -> tuple:
+        """(displacement (n, d) mm, Green-Lagrange strain with the assumed volumetric part (n, d, d),
+        Cauchy stress (n, d, d) MPa, plane strain's sigma_zz (n,) (2D; else None), stored energy per
+        reference volume (n,) MPa) of displacement u at points x (n, d) in elements `cells` (n,)."""
+        m, d, nh = self.model, self.model.dim, self.nh
         value, grad = m.locator.shape(x, cells)                   # (nb, d, n), (nb, d, d, n)
         ue = u[m.element_dofs[:, cells]]                          # (nb, n)
         disp = np.einsum("kn,kin->ni", ue, value)
@@ -166,15 +195,7 @@ class FiniteContact:
         trace = np.trace(E_d, axis1=1, axis2=2)
         E_d = E_d + ((p / kappa - trace) / d)[:, None, None] * np.eye(d)    # the volumetric part assumed
         W = 0.5 * mu * (J ** (-2.0 / d) * I1 - d) + p * p / (2.0 * kappa)
-        n = len(x)
-        if d == 3:
-            comps = [(0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1)]
-            strain = np.stack([E_d[:, i, j] for i, j in comps], axis=1)
-            stress = np.stack([sigma_d[:, i, j] for i, j in comps], axis=1)
-        else:
-            strain = np.stack([E_d[:, 0, 0], E_d[:, 1, 1], E_d[:, 0, 1]], axis=1)
-            stress = np.stack([sigma_d[:, 0, 0], sigma_d[:, 1, 1], lame / kappa * p, sigma_d[:, 0, 1]], axis=1)
-        return np.concatenate([disp.reshape(n * d), strain.ravel(), stress.ravel(), W])
+        return disp, E_d, sigma_d, (lame / kappa * p if d == 2 else None), W
 
     def _positions(self, u) -> np.ndarray:
         x = self.X.copy()

@@ -79,6 +79,7 @@ class ExperimentRun:
     validity: dict | None = None        # the linear result's range (`linear_validity`), run.json's "validity"
     viscoelastic: dict | None = None    # a relaxed time course's method and forces (run.json's "viscoelastic")
     stepped: object = None              # a course stepped in time: its fem.experiments.stepping.Stepped
+    finite_fields: list | None = None   # finite kinematics with a PVD: [(u (ndof,) mm, {measure: (M,)})] per step
 
     @property
     def name(self) -> str:
@@ -274,7 +275,9 @@ def finite_experiments(model, info, scene: Scene, progress, only: int | None = N
     turn (or its force) on the neo-Hookean model, its steps ContactResults with the force per candidate along the
     approach, the deflection along it, the normal gaps, the pressure of the normal forces over the
     reference areas (nominal), the KKT check, the stored energy, and receptor values of the finite
-    state (`FiniteContact.observe`, read by the sampler `with_energy`). No contact model (no PVD)."""
+    state (`FiniteContact.observe`, read by the sampler `with_energy`); with a PVD, each step's
+    displacement and the finite measures at the element centroids (`run.finite_fields`). No contact
+    model."""
     sn, runs, warnings, _, line, grid = _plan(model, info, scene)
     with progress.task(f"receptor operators at {len(grid.points_mm)} points", kind=f"sampler-{model.dim}d",
                        size=len(grid.points_mm)):
@@ -292,6 +295,9 @@ def finite_experiments(model, info, scene: Scene, progress, only: int | None = N
             done = {}                             # a course repeats states (a hold): one result each
             run.steps = [(off, done[id(r)] if id(r) in done else done.setdefault(
                 id(r), finite_result(fc, run.indentor, r, sn, facets, sampler))) for off, r in course]
+            if writes_pvd(scene.output, len(course)):
+                fields = {id(r): (r.u, fc.element_fields(r.u)) for _, r in course}
+                run.finite_fields = [fields[id(r)] for _, r in course]
             run.seconds += time.perf_counter() - t0
             continue
         for off in exp.offsets_mm:                # a sweep: each position indented from rest
@@ -304,6 +310,8 @@ def finite_experiments(model, info, scene: Scene, progress, only: int | None = N
                 with progress.task(f"{run.name}: finite contact to {max(exp.depth_mm):g} mm{where}", kind="finite"):
                     results = fc.indent(ind, exp.depth_mm, progress=progress)
             run.steps += [(np.asarray(off, float), finite_result(fc, ind, r, sn, facets, sampler)) for r in results]
+            if writes_pvd(scene.output, len(exp.indentations)):
+                run.finite_fields = (run.finite_fields or []) + [(r.u, fc.element_fields(r.u)) for r in results]
         run.seconds += time.perf_counter() - t0
     return SceneRun(model, info, scene, None, sn, grid, sampler.with_energy(), list(scene.receptors.measures), line,
                     runs, warnings, [])

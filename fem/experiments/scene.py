@@ -575,15 +575,14 @@ class Scene:
 
     def check_kinematics(self) -> None:
         """Raise InputError for what finite kinematics does not run yet (fem.contact.finite): scans,
-        indentors other than cylinders, spheres, bars and punches, viscoelastic layers, afferents
-        and PVD output."""
+        indentors other than cylinders, spheres, bars and punches, viscoelastic layers and
+        afferents."""
         if self.kinematics not in ("linear", "finite"):
             raise InputError(f'kinematics must be "linear" or "finite", got {self.kinematics!r}')
         if self.kinematics == "linear":
             return
         why = ("viscoelastic layers" if self.viscoelastic is not None else
-               "afferents" if self.afferents is not None else
-               "a PVD series (pvd = true)" if self.output.pvd else None)
+               "afferents" if self.afferents is not None else None)
         for exp in self.experiments:
             parts = shapes_for(exp.indentor)[1]
             sphere = (len(parts) == 1 and isinstance(parts[0], Ellipsoid)

@@ -25,7 +25,7 @@ import numpy as np
 
 from fem.core.measures import base_measure
 from fem.io.nwb import write_nwb
-from fem.io.vtu import vtu_mesh, write_mesh
+from fem.io.vtu import fields_mesh, vtu_mesh, write_mesh
 from fingertip.errors import InputError
 from fingertip.progress import as_progress
 from fingertip.staging import write_json
@@ -187,7 +187,7 @@ def write_run(folder, model_dir, scene_run, afferents=(None, {}), progress=None)
             if scene_run.scene.afferents.nwb:
                 write_nwb(folder / run.name / NWB_FILE, run.name, responses[run.name],
                           tables["steps"]["depth_mm"], tables["steps"]["force_N"])
-        if writes_pvd(out, len(run.steps)) and scene_run.scene.kinematics == "linear":    # finite: no PVD yet
+        if writes_pvd(out, len(run.steps)):
             _write_pvd(folder, run, scene_run, progress)
     record = run_record(model_dir, scene_run)
     if population is not None:
@@ -273,17 +273,20 @@ def _write_pvd(folder, run, scene_run, progress) -> None:
     """<name>_<step>.vtu with the full fields of every indentation and the <name>.pvd series, its
     timestep values as `pvd_times` says. A viscoelastic step's fields are its elastic solution's:
     its displacements and strains, not its relaxed stresses (a course stepped in time: its own
-    displacements)."""
-    if run.stepped is not None:                     # a course stepped in time keeps its fields
-        U = run.stepped.displacement_mm
+    displacements); a finite kinematics step's are its deformed state's (`run.finite_fields`)."""
+    if run.finite_fields is not None:              # finite kinematics: the deformed state's own
+        meshes = [fields_mesh(scene_run.model, u, fields, deformed=True) for u, fields in run.finite_fields]
     else:
-        comp = scene_run.contact.compliance(run.indentor.approach)
-        forces = [r.force_N if r.elastic_force_N is None else r.elastic_force_N for _, r in run.steps]
-        U = comp.displacement(np.stack(forces, axis=1))                          # one solve, k loads
+        if run.stepped is not None:                 # a course stepped in time keeps its fields
+            U = run.stepped.displacement_mm
+        else:
+            comp = scene_run.contact.compliance(run.indentor.approach)
+            forces = [r.force_N if r.elastic_force_N is None else r.elastic_force_N for _, r in run.steps]
+            U = comp.displacement(np.stack(forces, axis=1))                      # one solve, k loads
+        meshes = [vtu_mesh(scene_run.model.solution(U[:, i])) for i in range(len(run.steps))]
     names = [f"{run.name}_{i:03d}.vtu" for i in range(len(run.steps))]
     with ThreadPoolExecutor(max_workers=2) as pool:     # files compress in parallel (zlib frees the GIL)
-        writes = [pool.submit(write_mesh, folder / name, vtu_mesh(scene_run.model.solution(U[:, i])))
-                  for i, name in enumerate(names)]
+        writes = [pool.submit(write_mesh, folder / name, mesh) for name, mesh in zip(names, meshes)]
         for w in progress.bar(writes, desc=f"{run.name}: VTU files", unit="file"):
             w.result()
     times, meaning = pvd_times(run)

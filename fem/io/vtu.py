@@ -4,7 +4,9 @@
 
 VTU: `tetra10` (3D) or `triangle6` (2D) cells on all P2 nodes; point data `displacement_mm`
 (n, 3); cell data `layer`, `E_MPa`, `nu` and every measure of fem.core.measures.MEASURES evaluated
-at the element centroid (cell data, so nothing is averaged across a layer interface).
+at the element centroid (cell data, so nothing is averaged across a layer interface). A finite
+kinematics run's files hold the deformed geometry (points at their displaced positions) and the
+measures of the finite state (`fields_mesh`).
 """
 from __future__ import annotations
 
@@ -45,14 +47,22 @@ def write_mesh(path, mesh) -> None:
 
 def vtu_mesh(solution):
     """meshio.Mesh of a `solution`: the P2 cells, displacement and the element fields."""
-    model = solution.model
+    return fields_mesh(solution.model, solution.u, solution.element_fields)
+
+
+def fields_mesh(model, u, element_fields: dict, deformed: bool = False):
+    """meshio.Mesh of a model's displacement u (ndof,) mm with cell data `element_fields` ({name:
+    (M,)}); deformed: the points at their displaced positions (finite kinematics: the deformed
+    geometry), else at rest."""
+    disp = np.zeros((model.nnodes, 3))
+    disp[:, :model.dim] = np.asarray(u, float).reshape(-1, model.dim)
     points = np.zeros((model.nnodes, 3))
     points[:, :model.dim] = model.nodes
-    disp = np.zeros((model.nnodes, 3))
-    disp[:, :model.dim] = solution.displacement_mm
+    if deformed:
+        points += disp
     E = np.vectorize(model.material.E_MPa.get, otypes=[float])(model.layer)
     nu = np.vectorize(model.material.nu.get, otypes=[float])(model.layer)
-    cell_data = {"layer": model.layer.astype(np.int32), "E_MPa": E, "nu": nu, **solution.element_fields}
+    cell_data = {"layer": model.layer.astype(np.int32), "E_MPa": E, "nu": nu, **element_fields}
     return meshio.Mesh(points, [(_VTK_CELL[model.dim], quadratic_cells(model))],
                        point_data={"displacement_mm": disp},
                        cell_data={k: [np.asarray(v)] for k, v in cell_data.items()})

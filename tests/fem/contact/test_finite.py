@@ -107,7 +107,7 @@ def test_indent_with_finite_kinematics(section, tmp_path, capsys):
     assert float(row["depth_mm"]) == pytest.approx(0.3, abs=1e-5)
     capsys.readouterr()
     base = ["indent", str(section), "--material", "m43338", "--quiet", "--kinematics", "finite"]
-    for bad in (["--indentor", "wedge", "--depth", "0.2"], ["--indentor", "C5", "--depth", "0.2", "--pvd"]):
+    for bad in (["--indentor", "wedge", "--depth", "0.2"], ["--indentor", "ellipsoid:2,3,2", "--depth", "0.2"]):
         out = tmp_path / "refused"
         code = pipeline.main(base + bad + ["--out", str(out)])
         err = capsys.readouterr().err.strip().splitlines()
@@ -181,3 +181,27 @@ def test_time_course_reads_one_increasing_series(section, tmp_path):
 def _section_model(section):
     model, _ = read_model(section, "m43338")
     return model, CONTACT_REGION[2], held_regions(model)
+
+
+def test_pvd_holds_the_deformed_state(section, tmp_path):
+    """--pvd under finite kinematics: each VTU's points are the deformed geometry (rest + the
+    displacement it holds), and its cell SED (the finite stored energy per reference volume at
+    the centroids) summed over the reference areas is the step's stored energy within 6 % (measured
+    -4.3 % at 0.2 mm and -3.5 % at 0.4 mm on this coarse mesh: one point per triangle for a field
+    concentrated under the contact)."""
+    import meshio
+    out = tmp_path / "pvd"
+    assert pipeline.main(["indent", str(section), "--material", "m43338", "--indentor", "C5", "--depth", "0.2,0.4",
+                          "--kinematics", "finite", "--pvd", "--no-plots", "--quiet", "--out", str(out)]) == 0
+    steps = csv_rows(out / "C5.csv")
+    model, _ = read_model(section, "m43338")
+    rest = np.zeros((model.nnodes, 3))
+    rest[:, :2] = model.nodes
+    corners = model.nodes[model.element_nodes[:3]]                   # (3, M, 2) triangle vertices
+    area = 0.5 * np.abs(np.cross(corners[1] - corners[0], corners[2] - corners[0]))
+    for k, row in enumerate(steps):
+        mesh = meshio.read(out / f"C5_{k:03d}.vtu")
+        np.testing.assert_allclose(mesh.points, rest + mesh.point_data["displacement_mm"], atol=1e-12)
+        assert np.abs(mesh.point_data["displacement_mm"]).max() >= float(row["depth_mm"]) * 0.9
+        energy = float(mesh.cell_data["sed_MPa"][0] @ area)
+        assert energy == pytest.approx(float(row["energy_Nmm"]), rel=0.06)
