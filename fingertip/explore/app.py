@@ -122,7 +122,7 @@ def profile_of(live, answer) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def number_texts(live, a) -> dict:
     """The page's number lines of an answer, with units (2D: per mm of length, widths)."""
     per = " per mm" if live.dim == 2 else ""
-    area = f"{a.contact_area_mm2:.4g} mm (width)" if live.dim == 2 else f"{a.contact_area_mm2:.4g} mm²"
+    area = f"{a.contact_area_mm2:.4g} mm" if live.dim == 2 else f"{a.contact_area_mm2:.4g} mm²"     # 2D: a width
     return {"force_text": f"{a.force_N:.6g} N{per}", "force_exact": repr(a.force_N),
             "depth_text": f"{a.depth_mm:.4g} mm", "area_text": area,
             "pressure_text": f"{a.max_pressure_MPa:.4g} MPa", "answer_ms": f"{1e3 * a.seconds:.0f} ms"}

@@ -84,13 +84,20 @@ class PadPicture:
 
     def pick(self, x_px: float, y_px: float) -> np.ndarray | None:
         """The pad point (3,) mm (as drawn, deformed) under a pixel of the picture (origin at its
-        bottom left), or None when the pixel shows no pad."""
+        bottom left), or None when the pixel shows no pad. In 2D, where the pad is a line, the
+        point of the section's plane under the pixel."""
         import vtk
+        renderer = self.plotter.renderer
+        if self.dim == 2:
+            renderer.SetDisplayPoint(float(x_px), float(y_px), 0.0)
+            renderer.DisplayToWorld()
+            world = np.asarray(renderer.GetWorldPoint(), float)
+            return world[:3] / world[3]
         picker = vtk.vtkCellPicker()
         picker.SetTolerance(0.002)
         picker.PickFromListOn()
         picker.AddPickList(self.actor)
-        if not picker.Pick(float(x_px), float(y_px), 0.0, self.plotter.renderer):
+        if not picker.Pick(float(x_px), float(y_px), 0.0, renderer):
             return None
         return np.asarray(picker.GetPickPosition(), float)
 
