@@ -70,23 +70,28 @@ class FiniteResult:
 
 class RigidSurface:
     """The closed-form surface of a one-part indentor (fem.contact.indentors.Indentor): a cylinder
-    of unbounded length or a sphere (round), or a flat bar of unbounded length or a circular punch
-    (flat: a face with a sharp edge, the gap to the face, to the side or to the edge, whichever is
-    nearest, as the signed distance to a semi-infinite box or cylinder)."""
+    of unbounded length or a sphere (round), or a flat bar of unbounded length, a plate (a flat
+    rectangle) or a circular punch (flat: a face with a sharp edge, the gap to the face, to the
+    side or to the edge, whichever is nearest, as the signed distance to a semi-infinite box or
+    cylinder)."""
 
     def __init__(self, indentor):
         shape = indentor.parts[0] if indentor.n_parts == 1 else None
         sphere = isinstance(shape, Ellipsoid) and shape.semi_u_mm == shape.semi_v_mm == shape.semi_w_mm
-        unbounded = isinstance(shape, (Cylinder, Flat)) and not math.isfinite(shape.length_mm)
-        if not (sphere or unbounded or isinstance(shape, Punch)):
+        unbounded = isinstance(shape, Cylinder) and not math.isfinite(shape.length_mm)
+        if not (sphere or unbounded or isinstance(shape, (Flat, Punch))):
             raise InputError(f"indentor {indentor.name}: finite kinematics takes cylinders (C1-C8, cylinder:<d>), "
-                             f"spheres, bars (bar:<w>) and punches so far; use the linear kinematics for the others")
+                             f"spheres, bars (bar:<w>, R1, R2), plates and punches so far; use the linear "
+                             f"kinematics for the others")
         self.round = isinstance(shape, (Cylinder, Ellipsoid))
         if self.round:
             self.radius_mm = 0.5 * shape.diameter_mm if isinstance(shape, Cylinder) else shape.semi_u_mm
         else:
             self.radius_mm = 0.5 * (shape.width_mm if isinstance(shape, Flat) else shape.diameter_mm)
         self.axis = indentor.e1 if isinstance(shape, (Cylinder, Flat)) else None
+        self.half_mm = None                 # a flat face of finite length (a plate): its half sides
+        if isinstance(shape, Flat) and math.isfinite(shape.length_mm):
+            self.half_mm, self.across = (0.5 * shape.length_mm, 0.5 * shape.width_mm), indentor.e2
         du, dv = indentor.offsets_mm[0]
         self.tip = indentor.origin_mm + du * indentor.e1 + dv * indentor.e2
         self.approach = indentor.approach
@@ -105,19 +110,37 @@ class RigidSurface:
         rel = x - (self.tip + travel_mm * a)
         ahead = rel @ a                                             # beyond the face, along the approach
         lateral = rel - np.outer(ahead, a)
-        if self.axis is not None:
-            lateral = lateral - np.outer(lateral @ self.axis, self.axis)
-        dist = np.linalg.norm(lateral, axis=1)
-        out_dir = lateral / np.maximum(dist, 1e-300)[:, None]
-        side = dist - self.radius_mm                                # beyond the side
+        if self.half_mm is not None:
+            side, out_dir, k_side = self._beyond_rectangle(lateral)
+        else:
+            if self.axis is not None:
+                lateral = lateral - np.outer(lateral @ self.axis, self.axis)
+            dist = np.linalg.norm(lateral, axis=1)
+            out_dir = lateral / np.maximum(dist, 1e-300)[:, None]
+            side, k_side = dist - self.radius_mm, np.zeros(len(x))  # beyond the side
         corner = (ahead > 0) & (side > 0)
         g = np.where(corner, np.hypot(ahead, side), np.maximum(ahead, side))
         n = np.where((ahead >= side)[:, None], a, out_dir)
-        k = np.zeros(len(x))
+        k = np.where(ahead >= side, 0.0, k_side)
         if corner.any():
             n[corner] = (ahead[corner, None] * a + side[corner, None] * out_dir[corner]) / g[corner, None]
             k[corner] = 1.0 / g[corner]
         return g, n, k
+
+    def _beyond_rectangle(self, lateral):
+        """(signed distance (n,) beyond the plate's rectangle in its plane, unit direction (n, 3) out
+        of it, curvature (n,) of that distance's level set: 1 / distance around a corner, else 0)
+        of lateral offsets (n, 3) from its centre."""
+        (hl, hw), e1, e2 = self.half_mm, self.axis, self.across
+        p, q = lateral @ e1, lateral @ e2
+        dx, dy = np.abs(p) - hl, np.abs(q) - hw
+        ex = np.where(p >= 0, 1.0, -1.0)[:, None] * e1
+        ey = np.where(q >= 0, 1.0, -1.0)[:, None] * e2
+        both = (dx > 0) & (dy > 0)
+        side = np.where(both, np.hypot(dx, dy), np.maximum(dx, dy))
+        out_dir = np.where((dx >= dy)[:, None], ex, ey)
+        out_dir[both] = (dx[both, None] * ex[both] + dy[both, None] * ey[both]) / side[both, None]
+        return side, out_dir, np.where(both, 1.0 / np.where(both, side, 1.0), 0.0)
 
 
 class FiniteContact:

@@ -530,7 +530,7 @@ class Scene:
     max_indentations: int = _key("", _count, MAX_INDENTATIONS, "most indentations the scene may run (all its "
                                  "experiments together)", text=lambda word: _whole(word, "max_indentations"))
     kinematics: str = _key("", _text, "linear", "linear (small strain) or finite (large deformation: neo-Hookean "
-                           "layers; cylinders, spheres, bars and punches by depth or force, swept or not; "
+                           "layers; cylinders, spheres, bars, plates and punches by depth or force, swept or not; "
                            "fem.contact.finite)", text=str)
 
     @classmethod
@@ -575,7 +575,7 @@ class Scene:
 
     def check_kinematics(self) -> None:
         """Raise InputError for what finite kinematics does not run yet (fem.contact.finite): scans,
-        indentors other than cylinders, spheres, bars and punches, viscoelastic layers and
+        indentors other than cylinders, spheres, bars, plates and punches, viscoelastic layers and
         afferents."""
         if self.kinematics not in ("linear", "finite"):
             raise InputError(f'kinematics must be "linear" or "finite", got {self.kinematics!r}')
@@ -587,15 +587,15 @@ class Scene:
             parts = shapes_for(exp.indentor)[1]
             sphere = (len(parts) == 1 and isinstance(parts[0], Ellipsoid)
                       and parts[0].semi_u_mm == parts[0].semi_v_mm == parts[0].semi_w_mm)
-            long = (len(parts) == 1 and isinstance(parts[0], (Cylinder, Flat))
-                    and not np.isfinite(parts[0].length_mm))
+            long = (len(parts) == 1 and (isinstance(parts[0], Flat) or isinstance(parts[0], Cylinder)
+                                         and not np.isfinite(parts[0].length_mm)))
             punch = len(parts) == 1 and isinstance(parts[0], Punch)
             why = why or (f"experiment '{exp.name}': a scan" if exp.trace is not None and exp.trace.shape == "scan" else
                           f"experiment '{exp.name}': indentor {exp.indentor}" if not (sphere or long or punch) else None)
         if why:
-            raise InputError(f"kinematics = finite runs cylinders (C1-C8, cylinder:<d>), spheres, bars (bar:<w>) and "
-                             f"punches by depth or force, swept or in time, so far, not {why}: use kinematics = "
-                             f"linear for it")
+            raise InputError(f"kinematics = finite runs cylinders (C1-C8, cylinder:<d>), spheres, bars (bar:<w>, "
+                             f"R1, R2), plates and punches by depth or force, swept or in time, so far, not {why}: "
+                             f"use kinematics = linear for it")
 
     def check_dim(self, dim: int) -> None:
         """Raise InputError if an experiment cannot run on a model of `dim` (`Experiment.check_dim`)."""

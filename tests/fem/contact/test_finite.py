@@ -205,3 +205,38 @@ def test_pvd_holds_the_deformed_state(section, tmp_path):
         assert np.abs(mesh.point_data["displacement_mm"]).max() >= float(row["depth_mm"]) * 0.9
         energy = float(mesh.cell_data["sed_MPa"][0] @ area)
         assert energy == pytest.approx(float(row["energy_Nmm"]), rel=0.06)
+
+
+def test_plate_gap_is_the_signed_distance_to_its_box():
+    """A plate's gap is the signed distance to the semi-infinite box behind its face (outside: the
+    length of the positive part of (|u| - L/2, |v| - W/2, ahead); inside: the largest of them), its
+    normal that distance's gradient (central differences, 1e-6 mm)."""
+    from fem.contact.finite import RigidSurface
+    ind = make_indentor("plate:4", orientation=30.0, approach=[0.2, -1.0, 0.1])
+    surf = RigidSurface(ind)
+    rng = np.random.default_rng(1)
+    x = surf.tip + rng.uniform(-4, 4, (400, 3))
+
+    def sdf(y):
+        rel = y - surf.tip
+        d = np.stack([np.abs(rel @ ind.e1) - 2.0, np.abs(rel @ ind.e2) - 2.0, rel @ ind.approach], axis=1)
+        return np.where(d.max(axis=1) > 0, np.linalg.norm(np.maximum(d, 0), axis=1), d.max(axis=1))
+    g, n, _ = surf.distance(x, 0.0)
+    np.testing.assert_allclose(g, sdf(x), atol=1e-12)
+    h = 1e-6
+    grad = np.stack([(sdf(x + h * e) - sdf(x - h * e)) / (2 * h) for e in np.eye(3)], axis=1)
+    np.testing.assert_allclose(n, grad, atol=1e-5)
+
+
+def test_plate_on_the_section_by_the_same_checks(section):
+    """A 20 mm plate (its face covers the section's pad) 0.05-0.2 mm: the linear force at 0.05 mm
+    within 1 %, work = stored energy within 0.5 %, the constraint to GAP_TOL_MM."""
+    model, info = read_model(section, "m43338")
+    ind = make_indentor("plate")
+    depths = np.linspace(0.0, 0.2, 5)[1:]
+    finite = FiniteContact(model, CONTACT_REGION[2], held_regions(model)).indent(ind, depths)
+    linear = ContactModel.from_fe(model, factorise(model, info), CONTACT_REGION[2]).indent(ind, depth_mm=0.05)
+    assert abs(finite[0].force_N / linear.total_force_N - 1) < 1e-2
+    work = simpson(np.r_[0.0, [r.force_N for r in finite]], x=np.r_[0.0, depths])
+    assert abs(work / finite[-1].energy_Nmm - 1) < 5e-3
+    assert max(r.penetration_mm for r in finite) <= GAP_TOL_MM
