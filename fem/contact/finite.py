@@ -150,6 +150,7 @@ class FiniteContact:
 
     def __init__(self, model, region: str, held: dict, tol_mm: float = GAP_TOL_MM, tol: float = 1e-10):
         self.model, self.nh, self.tol_mm, self.tol = model, NeoHookean(model), tol_mm, tol
+        self._factor = None             # the last tangent's factorisation: its analysis serves the next
         self.sn = model.surface_nodes(region)
         self.fixed, values = model.discretisation.constraints(held, model.material.rigid)   # no factorisation
         if np.any(values):
@@ -315,7 +316,8 @@ class FiniteContact:
         gap], K_T = K + G^T D^-1 G the mixed tangent (`fem.core.linalg.SaddleFactor`, as the linear
         solver's): du = x0 + X lambda with x0 = K_T^-1 rhs, X = K_T^-1 C^T, and the constraints
         C du = -gap give (C X) lambda = -gap - C x0 (k x k, dense)."""
-        Y = SaddleFactor(K, G, self.nh.D, free=self.free)(np.column_stack([rhs, C.T.toarray()]))
+        self._factor = SaddleFactor(K, G, self.nh.D, free=self.free, reuse=self._factor)   # the same pattern
+        Y = self._factor(np.column_stack([rhs, C.T.toarray()]), refine=False)     # Newton corrects it
         x0, X = Y[:, 0], Y[:, 1:]
         lam = np.linalg.solve(C @ X, -gap - C @ x0) if C.shape[0] else np.zeros(0)
         return x0 + X @ lam, lam

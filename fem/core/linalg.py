@@ -167,8 +167,12 @@ class Pardiso:
     substitution (phase 333). S must be positive definite (true for the displacement rows of a
     quasi-definite matrix). Raises pypardiso's PyPardisoError when PARDISO fails and
     np.linalg.LinAlgError for an empty row or an S that is not positive definite.
+    reuse: an earlier factorisation of a matrix with the same pattern (`takes`): its analysis (the
+    ordering and symbolic factor, a quarter of a factorisation's time on the 1 mm monkey's
+    neo-Hookean tangent) serves this one, which takes over its handle (`reuse` cannot solve after).
     """
-    def __init__(self, upper: sp.csr_matrix, schur: np.ndarray | None = None, mkl_defaults: bool = False):
+    def __init__(self, upper: sp.csr_matrix, schur: np.ndarray | None = None, mkl_defaults: bool = False,
+                 reuse: "Pardiso | None" = None):
         from pypardiso.pardiso_wrapper import (
             PyPardisoError,  # pypardiso (MKL) only where PARDISO runs
         )
@@ -201,7 +205,11 @@ class Pardiso:
             # (two-level factorisation, iparm[23] = 1, is about 9 % faster on 2 cores, but its
             # last digits depend on the thread count: a Dask task's run would differ from serial)
         self._live = True
-        if not has_schur:
+        if not has_schur and reuse is not None and reuse.takes(self):
+            self._pt, self.iparm = reuse._pt, reuse.iparm       # its analysis (ordering, symbolic factor)
+            reuse._live = False                                 # the handle is this factorisation's now
+            self._long_phase(22, np.zeros((self.n, 1), order="F"), np.zeros((self.n, 1), order="F"), 1)
+        elif not has_schur:
             self._long_phase(12, np.zeros((self.n, 1), order="F"), np.zeros((self.n, 1), order="F"), 1)
         else:
             ip[35] = 2                                      # Schur complement + partial factorisation
@@ -214,6 +222,13 @@ class Pardiso:
             with dense_threads(len(S)):
                 self._schur_factor = interruptible(functools.partial(sla.cho_factor, S, lower=True, overwrite_a=True))
         self.nnz_factor = int(ip[17])
+
+    def takes(self, other: "Pardiso") -> bool:
+        """Whether `other` (a new matrix) can be factorised on this factorisation's analysis: this
+        one live, without a Schur complement, with the same settings and the same pattern."""
+        return (self._live and self._schur_factor is None and other._perm.size == 0 and self.n == other.n
+                and np.array_equal(self.iparm[[0, 1, 7, 9, 20]], other.iparm[[0, 1, 7, 9, 20]])
+                and np.array_equal(self._ia, other._ia) and np.array_equal(self._ja, other._ja))
 
     def _long_phase(self, phase, b, x, nrhs):
         """A phase that takes long (analysis, factorisation) run `interruptible`: Ctrl-C acts at
@@ -385,13 +400,15 @@ class SaddleFactor:
     the restricted copies exist only while the factorised matrix is built (on the human 0.5 mm
     model they would hold 0.3 GB through the factorisation and every later solve), and residuals
     multiply by the whole matrices.
+    reuse: an earlier SaddleFactor of a matrix with the same pattern, whose PARDISO analysis this
+    one reuses (`Pardiso`; the earlier one cannot solve after).
     A singular matrix raises InputError.
     """
     REFINE_TOL = 1e-10
     MAX_REFINE = 2
 
     def __init__(self, Kdev: sp.csr_matrix, B: sp.csr_matrix, D: np.ndarray, condensed=None, rotation=None,
-                 free=None):
+                 free=None, reuse: "SaddleFactor | None" = None):
         self.Kdev, self.B, self.D = Kdev, B, D
         self._free = None if free is None else np.asarray(free)
         self.n = Kdev.shape[0] if free is None else len(self._free)
@@ -416,7 +433,7 @@ class SaddleFactor:
         upper = drop_round_off(sp.bmat([[sp.triu(Kdev), B.T], [None, -sp.diags(D)]], format="csr"))
         del Kdev, B
         try:
-            self._pardiso = Pardiso(upper, condensed)
+            self._pardiso = Pardiso(upper, condensed, reuse=None if reuse is None else reuse._pardiso)
         except (PyPardisoError, np.linalg.LinAlgError) as exc:
             raise InputError(f"the stiffness matrix is singular ({exc}); check that every part of the "
                              "mesh is held") from None
@@ -454,9 +471,14 @@ class SaddleFactor:
         nr, nb = np.linalg.norm(r, axis=0), np.linalg.norm(b, axis=0)
         return r, np.where(nb > 0, nr / np.where(nb > 0, nb, 1.0), nr)
 
-    def __call__(self, b: np.ndarray) -> np.ndarray:
-        """x with K x = b (b (n,) or (n, k)); sets `last_residual` (max relative residual)."""
+    def __call__(self, b: np.ndarray, refine: bool = True) -> np.ndarray:
+        """x with K x = b (b (n,) or (n, k)); sets `last_residual` (max relative residual).
+        refine=False: the factorisation's solution as it is, no residual computed (an inexact
+        Newton step, whose outer iteration corrects it); `last_residual` NaN."""
         b = np.asarray(b, dtype=float)
+        if not refine:
+            self.last_residual, self.refinements = float("nan"), 0
+            return self._raw(b)
         return self._refine(self._raw(b), b)
 
     def solve_condensed(self, cols, check: bool = True) -> np.ndarray:
