@@ -287,18 +287,24 @@ class FiniteContact:
 
     def _advance(self, u, lam, surf, t0, depth, target):
         """(u, lambda, Newton iterations) at depth `target` from the state (u, lambda) at `depth`,
-        in steps of at most STEP_MM, halved up to MAX_CUTS times when Newton fails."""
-        step, cuts, iterations = STEP_MM, 0, 0
+        in steps of at most STEP_MM, halved up to MAX_CUTS times when Newton fails. Each step's
+        Newton starts from the last two states' linear extrapolation (when it inverts no element)."""
+        step, cuts, iterations, before = STEP_MM, 0, 0, None
         while depth < target - 1e-12:
             trial = min(target, depth + step)
+            start = u
+            if before is not None:
+                guess = u + (u - before[0]) * ((trial - depth) / (depth - before[1]))
+                start = guess if self.nh.jacobian(guess).min() > 0 else u
             try:
-                u_new, lam_new, its = self._newton(u, lam, surf, t0 + trial)
+                u_new, lam_new, its = self._newton(start, lam, surf, t0 + trial)
             except (FloatingPointError, RuntimeError) as exc:
                 cuts += 1
                 step /= 2
                 if cuts > MAX_CUTS:
                     raise RuntimeError(f"finite contact stopped at depth {depth:.4g} mm: {exc}") from None
                 continue
+            before = (u, depth)
             u, lam, depth = u_new, lam_new, trial
             iterations += its
             step = min(STEP_MM, 2 * step)
