@@ -288,53 +288,49 @@ def finite_experiments(model, info, scene: Scene, progress, only: int | None = N
         if only is not None and k != only:
             continue
         t0 = time.perf_counter()
-        exp = run.experiment
-        if exp.trace is not None:
-            with progress.task(f"{run.name}: finite contact through its time course", kind="finite"):
-                course = finite_course(fc, run, progress)
-            done = {}                             # a course repeats states (a hold): one result each
-            run.steps = [(off, done[id(r)] if id(r) in done else done.setdefault(
-                id(r), finite_result(fc, run.indentor, r, sn, facets, sampler))) for off, r in course]
-            if writes_pvd(scene.output, len(course)):
-                fields = {id(r): (r.u, fc.element_fields(r.u)) for _, r in course}
-                run.finite_fields = [fields[id(r)] for _, r in course]
-            run.seconds += time.perf_counter() - t0
-            continue
-        for off in exp.offsets_mm:                # a sweep: each position indented from rest
-            ind = run.indentor if exp.sweep is None else run.indentor.shifted(off)
-            where = "" if exp.sweep is None else f" at offset {np.round(off[exp.sweep[0]], 6):g} mm"
-            if exp.force_N is not None:
-                with progress.task(f"{run.name}: finite contact at {exp.force_N:g} N{where}", kind="finite"):
-                    results = [fc.indent_force(ind, exp.force_N, exp.loads[0]["max_depth_mm"], progress=progress)]
-            else:
-                with progress.task(f"{run.name}: finite contact to {max(exp.depth_mm):g} mm{where}", kind="finite"):
-                    results = fc.indent(ind, exp.depth_mm, progress=progress)
-            run.steps += [(np.asarray(off, float), finite_result(fc, ind, r, sn, facets, sampler)) for r in results]
-            if writes_pvd(scene.output, len(exp.indentations)):
-                run.finite_fields = (run.finite_fields or []) + [(r.u, fc.element_fields(r.u)) for r in results]
+        course = finite_course(fc, run, progress)
+        states = {id(r): (ind, r) for _, ind, r in course}     # a hold repeats a state: once each
+        results = {k: finite_result(fc, ind, r, sn, facets, sampler) for k, (ind, r) in states.items()}
+        run.steps = [(np.asarray(off, float), results[id(r)]) for off, _, r in course]
+        if writes_pvd(scene.output, len(course)):
+            fields = {k: (r.u, fc.element_fields(r.u)) for k, (_, r) in states.items()}
+            run.finite_fields = [fields[id(r)] for _, _, r in course]
         run.seconds += time.perf_counter() - t0
     return SceneRun(model, info, scene, None, sn, grid, sampler.with_energy(), list(scene.receptors.measures), line,
                     runs, warnings, [])
 
 
 def finite_course(fc: FiniteContact, run: ExperimentRun, progress) -> list:
-    """[(offset (3,), FiniteResult)] of a traced experiment, one per sample: frictionless
-    hyperelastic contact has no memory of its path, so the course's distinct depths are solved
-    once as one increasing series (by force: each distinct force from rest) and read at every
-    sample."""
+    """[(offset (3,), indentor there, FiniteResult)] of an experiment, one per indentation.
+    Frictionless hyperelastic contact has no memory of its path: each sweep position is indented
+    from rest, and a time course's distinct depths are solved once as one increasing series (by
+    force: each distinct force from rest) and read at every sample (the same result object)."""
     exp, ind = run.experiment, run.indentor
+    max_depth = exp.loads[0].get("max_depth_mm")
+    if exp.trace is None:
+        out = []
+        for off in exp.offsets_mm:
+            at = ind if exp.sweep is None else ind.shifted(off)
+            where = "" if exp.sweep is None else f" at offset {np.round(off[exp.sweep[0]], 6):g} mm"
+            with progress.task(f"{run.name}: finite contact " + (f"at {exp.force_N:g} N" if exp.force_N is not None
+                               else f"to {max(exp.depth_mm):g} mm") + where, kind="finite"):
+                results = ([fc.indent_force(at, exp.force_N, max_depth, progress=progress)]
+                           if exp.force_N is not None else fc.indent(at, exp.depth_mm, progress=progress))
+            out += [(off, at, r) for r in results]
+        return out
     samples = exp.indentations
-    if exp.force_N is None:
-        depths = sorted({round(load["depth_mm"], 12) for _, load in samples})
-        at = dict(zip(depths, fc.indent(ind, depths, progress=progress)))
-        return [(off, at[round(load["depth_mm"], 12)]) for off, load in samples]
-    at = {}
-    for _, load in samples:
-        f = round(load.get("force_N", 0.0), 15)
-        if f not in at:
-            at[f] = (fc.indent(ind, [0.0])[0] if f <= 0 else
-                     fc.indent_force(ind, f, exp.loads[0]["max_depth_mm"], progress=progress))
-    return [(off, at[round(load.get("force_N", 0.0), 15)]) for off, load in samples]
+    with progress.task(f"{run.name}: finite contact through its time course", kind="finite"):
+        if exp.force_N is None:
+            depths = sorted({round(load["depth_mm"], 12) for _, load in samples})
+            solved = dict(zip(depths, fc.indent(ind, depths, progress=progress)))
+            return [(off, ind, solved[round(load["depth_mm"], 12)]) for off, load in samples]
+        solved = {}
+        for _, load in samples:
+            f = round(load.get("force_N", 0.0), 15)
+            if f not in solved:
+                solved[f] = (fc.indent(ind, [0.0])[0] if f <= 0 else
+                             fc.indent_force(ind, f, max_depth, progress=progress))
+        return [(off, ind, solved[round(load.get("force_N", 0.0), 15)]) for off, load in samples]
 
 
 def finite_result(fc: FiniteContact, ind, r, sn, facets, sampler) -> ContactResult:

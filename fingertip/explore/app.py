@@ -51,12 +51,7 @@ class Plots:
         self.live, self.map_key, self.map_fig = live, None, None
         self.profile_fig = explorer_profile_figure([0.0], [0.0], [0.0], "x, mm")
         self.lines = [ax.lines[0] for ax in self.profile_fig.axes]
-        self._settle(self.profile_fig)
-
-    @staticmethod
-    def _settle(fig) -> None:
-        """Plain numbers on the figure's axes (its margins are fixed)."""
-        plain_numbers(fig)
+        plain_numbers(self.profile_fig)
 
     def receptor_map(self, answer, depth_mm: float, measure: str) -> str:
         """PNG data URL of `measure` at the receptor points `depth_mm` deep."""
@@ -66,7 +61,7 @@ class Plots:
         if self.map_key != (depth_mm, measure):
             across = r["z_mm"] if self.live.dim == 3 else r["y_mm"]
             self.map_fig = receptor_map_figure(r["x_mm"][at], across[at], values, measure, depth_mm, self.live.dim)
-            self._settle(self.map_fig)
+            plain_numbers(self.map_fig)
             self.map_key = (depth_mm, measure)
         art = self.map_fig.axes[0].collections[0]
         art.set_array(values)
