@@ -1,20 +1,24 @@
 """Large-deformation frictionless contact of the layered neo-Hookean fingertip
-(`fem.core.neohookean.NeoHookean`) with a rigid indentor whose surface is known in closed form:
-cylinders (in 2D their circular section) and spheres, flat bars and circular punches (`RigidSurface`).
+(`fem.core.neohookean.NeoHookean`) with a rigid indentor whose surface is known in closed form
+(`fem.contact.surfaces.RigidSurface`: cylinders, spheres, bars, plates, punches, gratings, steps,
+two-point stimuli with spherical tips).
 
 The gap of a candidate node is measured in the deformed configuration, to the indentor's true
 surface: the signed distance from its current position x = X + u to the surface, along the
 surface's normal (normal projection onto the circle, the cylinder's axis or the sphere's centre,
-g = |x - c|_perp - R; for a flat indentor the nearest of its face, its side and its edge). A node
-in contact carries a force lambda >= 0 along the normal n; the rest of the surface is free. The method is an active set with Lagrange multipliers (a semi-smooth
-Newton): each iteration solves the mixed u-p tangent bordered by the active constraints,
+g = |x - c|_perp - R; for a flat indentor the nearest of its face, its side and its edge; for a
+step the closest point of its profile; for several parts or bars the nearest of them). A node
+in contact carries a force lambda >= 0 along the normal n; the rest of the surface is free. The
+method is an active set with Lagrange multipliers (a semi-smooth Newton): each iteration solves
+the mixed u-p tangent bordered by the active constraints,
 
     [ K - sum lambda_i H_i   G^T   -C^T ] [du]   [-(f_int - C^T lambda)]
     [ G                      -D     0   ] [dp] = [ 0                   ]
     [-C                       0     0   ] [lam]  [ g_active            ]
 
 (C: the active nodes' normals; H_i = k_i (I - n n^T) with k_i the curvature of the gap's level set,
-1 / |x - c|_perp for a round indentor, 1 / distance from the edge around a flat one's edge; the
+1 / |x - c|_perp for a round indentor, 1 / distance from the edge around a flat one's edge, the
+profile's curvature at the closest point for a step; the
 pressure block as in NeoHookean), and then moves the active set: nodes whose multiplier turns
 negative leave, nodes that penetrate by more than GAP_TOL_MM join. It stops when the active set
 is stable, the free residual is below `tol` of the contact force and every gap is within GAP_TOL_MM,
@@ -37,8 +41,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from fem.contact.indentors import Cylinder, Ellipsoid, Flat, Punch
 from fem.contact.linear import GAP_TOL_MM
+from fem.contact.surfaces import RigidSurface
 from fem.core.linalg import SaddleFactor
 from fem.core.measures import State, evaluate
 from fem.core.neohookean import NeoHookean
@@ -66,81 +70,6 @@ class FiniteResult:
     penetration_mm: float
     min_J: float
     iterations: int
-
-
-class RigidSurface:
-    """The closed-form surface of a one-part indentor (fem.contact.indentors.Indentor): a cylinder
-    of unbounded length or a sphere (round), or a flat bar of unbounded length, a plate (a flat
-    rectangle) or a circular punch (flat: a face with a sharp edge, the gap to the face, to the
-    side or to the edge, whichever is nearest, as the signed distance to a semi-infinite box or
-    cylinder)."""
-
-    def __init__(self, indentor):
-        shape = indentor.parts[0] if indentor.n_parts == 1 else None
-        sphere = isinstance(shape, Ellipsoid) and shape.semi_u_mm == shape.semi_v_mm == shape.semi_w_mm
-        unbounded = isinstance(shape, Cylinder) and not math.isfinite(shape.length_mm)
-        if not (sphere or unbounded or isinstance(shape, (Flat, Punch))):
-            raise InputError(f"indentor {indentor.name}: finite kinematics takes cylinders (C1-C8, cylinder:<d>), "
-                             f"spheres, bars (bar:<w>, R1, R2), plates and punches so far; use the linear "
-                             f"kinematics for the others")
-        self.round = isinstance(shape, (Cylinder, Ellipsoid))
-        if self.round:
-            self.radius_mm = 0.5 * shape.diameter_mm if isinstance(shape, Cylinder) else shape.semi_u_mm
-        else:
-            self.radius_mm = 0.5 * (shape.width_mm if isinstance(shape, Flat) else shape.diameter_mm)
-        self.axis = indentor.e1 if isinstance(shape, (Cylinder, Flat)) else None
-        self.half_mm = None                 # a flat face of finite length (a plate): its half sides
-        if isinstance(shape, Flat) and math.isfinite(shape.length_mm):
-            self.half_mm, self.across = (0.5 * shape.length_mm, 0.5 * shape.width_mm), indentor.e2
-        du, dv = indentor.offsets_mm[0]
-        self.tip = indentor.origin_mm + du * indentor.e1 + dv * indentor.e2
-        self.approach = indentor.approach
-
-    def distance(self, x, travel_mm: float):
-        """(gap (n,), normal (n, 3) from the indentor towards the point, curvature (n,) [1/mm] of
-        the gap's level set at the point: 1 / distance from the axis, centre or edge, 0 on a flat
-        face or side) of points x (n, 3) when the tip has travelled travel_mm along the approach."""
-        a = self.approach
-        if self.round:
-            r = x - (self.tip + (travel_mm - self.radius_mm) * a)
-            if self.axis is not None:
-                r = r - np.outer(r @ self.axis, self.axis)
-            rho = np.linalg.norm(r, axis=1)
-            return rho - self.radius_mm, r / rho[:, None], 1.0 / rho
-        rel = x - (self.tip + travel_mm * a)
-        ahead = rel @ a                                             # beyond the face, along the approach
-        lateral = rel - np.outer(ahead, a)
-        if self.half_mm is not None:
-            side, out_dir, k_side = self._beyond_rectangle(lateral)
-        else:
-            if self.axis is not None:
-                lateral = lateral - np.outer(lateral @ self.axis, self.axis)
-            dist = np.linalg.norm(lateral, axis=1)
-            out_dir = lateral / np.maximum(dist, 1e-300)[:, None]
-            side, k_side = dist - self.radius_mm, np.zeros(len(x))  # beyond the side
-        corner = (ahead > 0) & (side > 0)
-        g = np.where(corner, np.hypot(ahead, side), np.maximum(ahead, side))
-        n = np.where((ahead >= side)[:, None], a, out_dir)
-        k = np.where(ahead >= side, 0.0, k_side)
-        if corner.any():
-            n[corner] = (ahead[corner, None] * a + side[corner, None] * out_dir[corner]) / g[corner, None]
-            k[corner] = 1.0 / g[corner]
-        return g, n, k
-
-    def _beyond_rectangle(self, lateral):
-        """(signed distance (n,) beyond the plate's rectangle in its plane, unit direction (n, 3) out
-        of it, curvature (n,) of that distance's level set: 1 / distance around a corner, else 0)
-        of lateral offsets (n, 3) from its centre."""
-        (hl, hw), e1, e2 = self.half_mm, self.axis, self.across
-        p, q = lateral @ e1, lateral @ e2
-        dx, dy = np.abs(p) - hl, np.abs(q) - hw
-        ex = np.where(p >= 0, 1.0, -1.0)[:, None] * e1
-        ey = np.where(q >= 0, 1.0, -1.0)[:, None] * e2
-        both = (dx > 0) & (dy > 0)
-        side = np.where(both, np.hypot(dx, dy), np.maximum(dx, dy))
-        out_dir = np.where((dx >= dy)[:, None], ex, ey)
-        out_dir[both] = (dx[both, None] * ex[both] + dy[both, None] * ey[both]) / side[both, None]
-        return side, out_dir, np.where(both, 1.0 / np.where(both, side, 1.0), 0.0)
 
 
 class FiniteContact:

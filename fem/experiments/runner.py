@@ -61,8 +61,8 @@ MAX_INVERTED_FRACTION = 0.0
 """Fraction of the elements that the linear displacement may turn inside out (det(I + grad u) <= 0
 at the centroid) before `linear_validity` warns: none, since such a displacement is no deformation
 a body can take."""
-LARGE_DEFORMATION = ("for large deformation use --kinematics finite (scene: kinematics = \"finite\"; cylinders, "
-                     "spheres, bars, plates and punches)")
+LARGE_DEFORMATION = ("for large deformation use --kinematics finite (scene: kinematics = \"finite\"; all "
+                     "indentors but wedges, cones and ellipsoids)")
 """What a warning of `validity_warning` points to beyond the linear range."""
 
 

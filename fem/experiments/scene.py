@@ -43,8 +43,9 @@ from pathlib import Path
 
 import numpy as np
 
-from fem.contact.indentors import Cylinder, Ellipsoid, Flat, Punch, orientation_deg, shapes_for
+from fem.contact.indentors import orientation_deg, shapes_for
 from fem.contact.linear import MAX_DEPTH_MM
+from fem.contact.surfaces import check_modelled
 from fem.core.materials import DEFAULT_CODE, DEFAULT_NU, Material
 from fem.core.measures import check_names
 from fem.core.viscoelastic import PAWLUK_HOWE_TAU_S, LayerLaws, Prony
@@ -530,7 +531,8 @@ class Scene:
     max_indentations: int = _key("", _count, MAX_INDENTATIONS, "most indentations the scene may run (all its "
                                  "experiments together)", text=lambda word: _whole(word, "max_indentations"))
     kinematics: str = _key("", _text, "linear", "linear (small strain) or finite (large deformation: neo-Hookean "
-                           "layers; cylinders, spheres, bars, plates and punches by depth or force, swept or not; "
+                           "layers; cylinders, spheres, bars, plates, punches, gratings, steps and two-point with spherical "
+                           "tips, by depth or force, swept or not; "
                            "fem.contact.finite)", text=str)
 
     @classmethod
@@ -575,8 +577,8 @@ class Scene:
 
     def check_kinematics(self) -> None:
         """Raise InputError for what finite kinematics does not run yet (fem.contact.finite): scans,
-        indentors other than cylinders, spheres, bars, plates and punches, viscoelastic layers and
-        afferents."""
+        viscoelastic layers, afferents and indentors `fem.contact.surfaces.RigidSurface` does not
+        model (`check_modelled`)."""
         if self.kinematics not in ("linear", "finite"):
             raise InputError(f'kinematics must be "linear" or "finite", got {self.kinematics!r}')
         if self.kinematics == "linear":
@@ -584,18 +586,16 @@ class Scene:
         why = ("viscoelastic layers" if self.viscoelastic is not None else
                "afferents" if self.afferents is not None else None)
         for exp in self.experiments:
-            parts = shapes_for(exp.indentor)[1]
-            sphere = (len(parts) == 1 and isinstance(parts[0], Ellipsoid)
-                      and parts[0].semi_u_mm == parts[0].semi_v_mm == parts[0].semi_w_mm)
-            long = (len(parts) == 1 and (isinstance(parts[0], Flat) or isinstance(parts[0], Cylinder)
-                                         and not np.isfinite(parts[0].length_mm)))
-            punch = len(parts) == 1 and isinstance(parts[0], Punch)
-            why = why or (f"experiment '{exp.name}': a scan" if exp.trace is not None and exp.trace.shape == "scan" else
-                          f"experiment '{exp.name}': indentor {exp.indentor}" if not (sphere or long or punch) else None)
+            if why is None and exp.trace is not None and exp.trace.shape == "scan":
+                why = f"experiment '{exp.name}': a scan"
         if why:
-            raise InputError(f"kinematics = finite runs cylinders (C1-C8, cylinder:<d>), spheres, bars (bar:<w>, "
-                             f"R1, R2), plates and punches by depth or force, swept or in time, so far, not {why}: "
+            raise InputError(f"kinematics = finite runs by depth or force, swept or in time, so far, not {why}: "
                              f"use kinematics = linear for it")
+        for exp in self.experiments:
+            try:
+                check_modelled(exp.indentor)
+            except InputError as exc:
+                raise InputError(f"kinematics = finite, experiment '{exp.name}': {exc}") from None
 
     def check_dim(self, dim: int) -> None:
         """Raise InputError if an experiment cannot run on a model of `dim` (`Experiment.check_dim`)."""
