@@ -23,7 +23,7 @@ import numpy as np
 
 from fem.contact.facets import fe_facets, smoothed_pressure
 from fem.contact.finite import FiniteContact
-from fem.contact.indentors import approach_direction, make_indentor
+from fem.contact.indentors import Cylinder, Ellipsoid, Flat, Step, approach_direction, make_indentor, shapes_for
 from fem.contact.linear import MAX_DEPTH_MM, ContactModel, ContactResult, kkt_record, reach, tissue_mm
 from fem.core.fields import centroid_jacobians
 from fem.core.materials import FLUID_LAYER
@@ -64,6 +64,14 @@ a body can take."""
 LARGE_DEFORMATION = ("for large deformation use --kinematics finite (scene: kinematics = \"finite\"; all "
                      "indentors but wedges, cones and ellipsoids)")
 """What a warning of `validity_warning` points to beyond the linear range."""
+LINEAR_ENOUGH_MM = {2: {"cylinder": 0.12, "bar": 0.13, "sphere": 0.18, "step": 0.08},
+                    3: {"cylinder": 0.43, "bar": 0.1, "sphere": 0.64}}
+"""Depth [mm] per model dimension and indentor class beyond which linear and finite kinematics
+differ by more than 5 % in force or in the peak receptor SED at 0.75 mm, whichever comes first,
+the smallest over the models measured, rounded down to 0.01 mm (benchmarks/finite_contact.py:
+2D monkey section and 8 mm cylinder with bone, 0.25 mm, C1, C5, C8, a 2 mm bar, a 3 mm sphere,
+step 2; 3D monkey preset, 1 mm, C5, the bar and the sphere; docs/indentation.md, "When linear is
+enough"); an indentor of no class measured takes the smallest of its dimension."""
 
 
 @dataclass
@@ -381,10 +389,44 @@ def linear_validity(run: ExperimentRun, sampler: ReceptorSampler, cm: ContactMod
         inverted = float(np.mean(centroid_jacobians(model, u)[solid] <= 0))
     linear = strain[worst] <= MAX_LINEAR_STRAIN and (inverted is None or inverted <= MAX_INVERTED_FRACTION)
     return {"checked_indentation": deepest, "depth_mm": float(steps[deepest].depth_mm.max()),
+            "linear_enough_mm": linear_enough_mm(run.experiment.indentor, model.dim),
             "inverted_elements": inverted, "inversion_checked": inverted is not None,
             "max_receptor_strain": strain[worst], "max_receptor_strain_indentation": worst,
             "max_linear_strain": MAX_LINEAR_STRAIN, "max_inverted_fraction": MAX_INVERTED_FRACTION,
             "within_linear_range": bool(linear)}
+
+
+def indentor_class(code: str) -> str | None:
+    """The class of an indentor code in LINEAR_ENOUGH_MM ("cylinder", "bar", "sphere", "step"), or
+    None for the others (plates, punches, gratings, wedges, cones, ellipsoids, two-point)."""
+    parts = shapes_for(code)[1]
+    shape = parts[0] if len(parts) == 1 else None
+    if isinstance(shape, Cylinder):
+        return "cylinder"
+    if isinstance(shape, Flat) and not np.isfinite(shape.length_mm):
+        return "bar"
+    if isinstance(shape, Ellipsoid) and shape.semi_u_mm == shape.semi_v_mm == shape.semi_w_mm:
+        return "sphere"
+    return "step" if isinstance(shape, Step) else None
+
+
+def linear_enough_mm(code: str, dim: int) -> float:
+    """LINEAR_ENOUGH_MM's depth [mm] for an indentor code on a model of dimension `dim`."""
+    table = LINEAR_ENOUGH_MM[dim]
+    return table.get(indentor_class(code), min(table.values()))
+
+
+def linear_note(run: ExperimentRun) -> str | None:
+    """One line for a linear experiment deeper than its `linear_enough_mm` and within the linear
+    range (beyond it `validity_warning` speaks), else None."""
+    v = run.validity
+    if v is None or not v["within_linear_range"] or v["depth_mm"] <= v["linear_enough_mm"]:
+        return None
+    cls = indentor_class(run.experiment.indentor)
+    return (f"{run.name} reaches {v['depth_mm']:.3g} mm: beyond {v['linear_enough_mm']:.2g} mm linear and finite "
+            f"kinematics differ by more than 5 % in force or receptor SED "
+            f"({'for ' + cls + 's' if cls else 'the smallest depth measured for any indentor'}; docs/indentation.md, "
+            f"\"When linear is enough\"): --kinematics finite for large-deformation numbers")
 
 
 def validity_warning(run: ExperimentRun) -> str | None:

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from fem.experiments.response import ResponseStore
-from fem.experiments.runner import prepare_responses, run_scene, validity_warning
+from fem.experiments.runner import linear_note, prepare_responses, run_scene, validity_warning
 from fem.experiments.scene import Receptors, Scene
 from fem.io.modelfolder import check_folder_material, folder_info
 from fem.io.runfolder import write_run
@@ -125,9 +125,11 @@ def afferent_line(name: str, resp) -> str:
 
 def validity_lines(experiments) -> list[str]:
     """Summary lines on the linear range (fem.experiments.runner.linear_validity): a warning per
-    experiment beyond it, and, when a stored response model answered (no full displacement
-    field), that element inversion was not checked."""
+    experiment beyond it, a note per experiment within it but deeper than where linear and finite
+    kinematics part by 5 % (`linear_note`), and, when a stored response model answered (no full
+    displacement field), that element inversion was not checked."""
     lines = [f"  warning: {w}" for e in experiments if (w := validity_warning(e)) is not None]
+    lines += [f"  note: {n}" for e in experiments if (n := linear_note(e)) is not None]
     unchecked = [e for e in experiments if e.validity is not None and not e.validity["inversion_checked"]]
     if unchecked:
         strain = max(e.validity["max_receptor_strain"] for e in unchecked)

@@ -5,7 +5,7 @@ import json
 
 import pytest
 
-from fem.experiments.runner import LARGE_DEFORMATION
+from fem.experiments.runner import LARGE_DEFORMATION, LINEAR_ENOUGH_MM
 from tests.helpers import cli, snapshot
 
 
@@ -47,7 +47,8 @@ def test_deep_wedge_inverts_elements_shallow_cylinder_does_not(cyl8, tmp_path):
     """A sharp wedge 2.5 mm into the cylinder with bone (3 mm of tissue over the bone) turns about
     1 % of the elements inside out and strains receptors by more than 1: run.json and the summary
     say so, and the warning is logged; C5 0.25 mm deep stays in the linear range (receptor strains
-    0.1) and says nothing. Both with --pvd: the factorised run has the full field the inversion
+    0.1) and warns of nothing, but notes, in one line, that it goes deeper than where linear and
+    finite kinematics part by 5 % for cylinders. Both with --pvd: the factorised run has the full field the inversion
     check needs (a stored response model does not: the next test)."""
     deep, shallow = tmp_path / "deep", tmp_path / "shallow"
     ran = cli("indent", cyl8, "--indentor", "wedge", "--depth", "1,2.5", "--no-plots", "--pvd", "--out", deep)
@@ -65,6 +66,10 @@ def test_deep_wedge_inverts_elements_shallow_cylinder_does_not(cyl8, tmp_path):
     assert ran.code == 0 and "warning" not in ran.out + ran.err
     v = json.loads((shallow / "run.json").read_text())["experiments"][0]["validity"]
     assert v["inverted_elements"] == 0.0 and v["max_receptor_strain"] < 0.2 and v["within_linear_range"]
+    assert v["linear_enough_mm"] == LINEAR_ENOUGH_MM[2]["cylinder"] < 0.25
+    notes = [t for t in ran.out.splitlines() if "note:" in t]
+    assert len(notes) == 1 and notes[0].startswith(f"  note: C5 reaches 0.25 mm: beyond {v['linear_enough_mm']:.2g} mm")
+    assert "for cylinders" in notes[0] and notes[0].endswith("--kinematics finite for large-deformation numbers")
 
 
 def test_stored_response_model_leaves_inversion_unchecked(cyl8, tmp_path):
@@ -77,3 +82,17 @@ def test_stored_response_model_leaves_inversion_unchecked(cyl8, tmp_path):
     v = json.loads((out / "run.json").read_text())["experiments"][0]["validity"]
     assert v["inverted_elements"] is None and not v["inversion_checked"] and v["max_receptor_strain"] > 1.0
     assert "element inversion not checked: a stored response model has no full displacement field" in ran.out
+
+
+def test_indentor_classes_and_their_linear_depth():
+    """Each indentor code falls in its LINEAR_ENOUGH_MM class; codes of no measured class take the
+    smallest depth of their dimension."""
+    from fem.experiments.runner import indentor_class, linear_enough_mm
+    classes = {"C1": "cylinder", "cylinder:3": "cylinder", "R1": "bar", "bar:2": "bar", "sphere:2": "sphere",
+               "step:0": "step", "step:1.2,0.4": "step", "plate": None, "punch": None, "grating:1": None,
+               "wedge": None, "ellipsoid:1,2,3": None, "two-point:3:1": None}
+    for code, cls in classes.items():
+        assert indentor_class(code) == cls, code
+        for dim in (2, 3):
+            table = LINEAR_ENOUGH_MM[dim]
+            assert linear_enough_mm(code, dim) == table.get(cls, min(table.values()))
