@@ -169,6 +169,10 @@ class Ellipsoid:
     semi_v_mm: float
     semi_w_mm: float
 
+    @property
+    def is_sphere(self) -> bool:
+        return self.semi_u_mm == self.semi_v_mm == self.semi_w_mm
+
     def height(self, u, v):
         a, b, c = self.semi_u_mm, self.semi_v_mm, self.semi_w_mm
         rho2 = (u / a) ** 2 + (v / b) ** 2

@@ -201,7 +201,7 @@ def _pieces(name: str, shape, e1, e2) -> list:
     """[(offset along e2 (mm) of the piece's tip from the part's, piece)] of one part's shape."""
     if isinstance(shape, Cylinder) and not math.isfinite(shape.length_mm):
         return [(0.0, Round(0.5 * shape.diameter_mm, e1))]
-    if isinstance(shape, Ellipsoid) and shape.semi_u_mm == shape.semi_v_mm == shape.semi_w_mm:
+    if isinstance(shape, Ellipsoid) and shape.is_sphere:
         return [(0.0, Round(shape.semi_u_mm))]
     if isinstance(shape, Flat):
         if math.isfinite(shape.length_mm):

@@ -405,7 +405,7 @@ def indentor_class(code: str) -> str | None:
         return "cylinder"
     if isinstance(shape, Flat) and not np.isfinite(shape.length_mm):
         return "bar"
-    if isinstance(shape, Ellipsoid) and shape.semi_u_mm == shape.semi_v_mm == shape.semi_w_mm:
+    if isinstance(shape, Ellipsoid) and shape.is_sphere:
         return "sphere"
     return "step" if isinstance(shape, Step) else None
 
