@@ -18,6 +18,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from fem.thesis.findings import VERDICTS, Finding, number  # noqa: E402
+from fem.thesis.kinematics import side_by_side  # noqa: E402
 
 DOC = ROOT / "docs" / "reproduction.md"
 DATA = ROOT / "docs" / "data" / "reproduction-full.json"
@@ -64,8 +65,16 @@ def table(data: dict) -> str:
     for f in findings:
         claim = f.title + (f"; read: {f.reading}" if f.reading else "")
         cells = [f.section, claim, f.verdict, "; ".join(_check(c) for c in f.checks)]
-        lines.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")     # a | in a cell ends it
+        lines.append(_row(cells))
+    lines += ["", "Both kinematics (the claims that depend on depth; `reproduce`'s report has the same table):", "",
+              "| thesis | claim | the thesis used | linear | finite | why |", "|---|---|---|---|---|---|"]
+    lines += [_row([r["section"], r["title"] + (f" ({r['key']})"), f"{r['thesis_kinematics']}: {r['thesis_words']}",
+                    r["linear"], r["finite"], r["why"]]) for r in side_by_side(findings)]
     return "\n".join(lines + ["", END])
+
+
+def _row(cells) -> str:
+    return "| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |"     # a | in a cell ends it
 
 
 def with_table(text: str, data: dict) -> str:

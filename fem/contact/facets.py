@@ -91,3 +91,15 @@ def node_pairs(facets, points_mm) -> np.ndarray:
                       np.column_stack([facets[rows, b], facets[:, 3 + j]])]
         pairs = np.vstack(pairs)
     return np.unique(np.sort(pairs, axis=1), axis=0)
+
+
+def edge_area_mm2(active, area_mm2, pairs) -> float:
+    """Tributary area [mm^2; mm in 2D] of a contact's outer ring: the nodes carrying force (active
+    (m,) bool) next to one that does not, neighbours by `node_pairs` (p, 2); area_mm2 (m,) the
+    tributary areas. A node-counted contact area (and a 2D contact width) moves in steps of about
+    this as the edge crosses the next ring of nodes, so it cannot resolve a change smaller than it."""
+    active = np.asarray(active, bool)
+    mixed = pairs[active[pairs[:, 0]] != active[pairs[:, 1]]]
+    edge = np.zeros(len(active), bool)
+    edge[mixed.ravel()] = True
+    return float(np.asarray(area_mm2)[edge & active].sum())

@@ -41,7 +41,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from fem.contact.linear import GAP_TOL_MM
+from fem.contact.facets import edge_area_mm2, fe_facets, node_pairs, smoothed_pressure
+from fem.contact.linear import GAP_TOL_MM, ContactResult, kkt_record
 from fem.contact.surfaces import RigidSurface
 from fem.core.linalg import SaddleFactor
 from fem.core.measures import State, evaluate
@@ -52,6 +53,9 @@ STEP_MM = 0.1
 """Depth increment of the load stepping (mm)."""
 MAX_CUTS = 6
 MAX_ITER = 40
+PATIENCE = 6
+"""Newton iterations in a row without a new smallest residual after which a step is given up (and
+cut): an active set cycling at the edge of the contact, or a diverging iterate, never recovers."""
 
 
 @dataclass
@@ -90,6 +94,8 @@ class FiniteContact:
         self.dofs = self.sn.dofs                                   # (m, dim)
         self.X = np.zeros((len(self.dofs), 3))
         self.X[:, :model.dim] = self.sn.x
+        self.facets = fe_facets(model, region, self.sn)
+        self._pairs = None                 # node_pairs of the facets, built on first use
 
     def observe(self, u, sampler) -> np.ndarray:
         """Receptor values of displacement u at a fem.receptors.grid.ReceptorSampler's points, in
@@ -150,6 +156,29 @@ class FiniteContact:
         W = 0.5 * mu * (J ** (-2.0 / d) * I1 - d) + p * p / (2.0 * kappa)
         return disp, E_d, sigma_d, (lame / kappa * p if d == 2 else None), W
 
+    def contact_result(self, indentor, r: FiniteResult, sampler=None) -> ContactResult:
+        """The indentation `r` by `indentor` as the linear solver's ContactResult: forces per candidate
+        along the approach, deflection along it, the normal gaps, the pressure of the normal forces
+        over the reference areas (nominal), the KKT check, the stored energy, and with a
+        fem.receptors.grid.ReceptorSampler the receptor values of the finite state (`observe`)."""
+        first = float(indentor.standoff(self.X).min())
+        f = r.contact_force_N * (r.normal @ indentor.approach)
+        res = ContactResult(indentor.name, np.array([r.depth_mm]), np.array([first + r.depth_mm]), f, r.gap_mm,
+                            r.u[self.dofs] @ indentor.approach[:self.model.dim], np.zeros(len(f), int),
+                            smoothed_pressure(r.contact_force_N, *self.facets), self.sn.area,
+                            kkt_record(r.contact_force_N, r.gap_mm, self.tol_mm),
+                            _observed=None if sampler is None else self.observe(r.u, sampler),
+                            stored_energy_Nmm=r.energy_Nmm)
+        res.kkt["iterations"] = r.iterations
+        return res
+
+    def edge_area_mm2(self, result: ContactResult) -> float:
+        """Tributary area [mm^2; mm in 2D] of a contact result's outer ring
+        (`fem.contact.facets.edge_area_mm2`): what its node-counted area cannot resolve."""
+        if self._pairs is None:
+            self._pairs = node_pairs(self.facets[0], self.sn.x)
+        return edge_area_mm2(result.active, result.area_mm2, self._pairs)
+
     def _positions(self, u) -> np.ndarray:
         x = self.X.copy()
         x[:, :self.model.dim] += u[self.dofs]
@@ -183,9 +212,9 @@ class FiniteContact:
     def indent_force(self, indentor, force_N: float, max_depth_mm: float, rtol: float = 1e-7,
                      progress=None) -> FiniteResult:
         """The state at which the force along the approach is force_N [N; N/mm in 2D]: depth steps
-        of STEP_MM until the force passes it, then the secant method, kept inside the bracket (by
-        bisection when it would leave it), each trial solved from the bracket's lower state, to
-        rtol. InputError when max_depth_mm [mm] does not reach the force."""
+        of STEP_MM until the force passes it, then the Illinois variant of regula falsi on the
+        bracket (superlinear; each trial solved from the bracket's lower state), to rtol.
+        InputError when max_depth_mm [mm] does not reach the force."""
         surf = RigidSurface(indentor)
         t0 = float(indentor.standoff(self.X).min())
         lo = (0.0, np.zeros(self.model.ndof), np.zeros(len(self.dofs)), 0.0)     # depth, u, lambda, force
@@ -199,9 +228,10 @@ class FiniteContact:
             if hi[3] >= force_N:
                 break
             lo = hi
+        side = 0                      # which end the last trials replaced: Illinois halves the other's excess
+        over = [lo[3] - force_N, hi[3] - force_N]
         for _ in range(60):
-            w = (force_N - lo[3]) / (hi[3] - lo[3])
-            d = lo[0] + (w if 0.02 < w < 0.98 else 0.5) * (hi[0] - lo[0])
+            d = lo[0] + over[0] / (over[0] - over[1]) * (hi[0] - lo[0])
             u, lam, its = self._advance(lo[1], lo[2], surf, t0, lo[0], d)
             res = self._result(u, lam, surf, t0 + d, d, its)
             if abs(res.force_N - force_N) <= rtol * force_N:
@@ -209,9 +239,13 @@ class FiniteContact:
                     progress.note(f"finite contact: {force_N:g} N at {d:.4g} mm")
                 return res
             if res.force_N < force_N:
-                lo = (d, u, lam, res.force_N)
+                lo, over[0] = (d, u, lam, res.force_N), res.force_N - force_N
+                over[1] *= 0.5 if side == -1 else 1.0
+                side = -1
             else:
-                hi = (d, u, lam, res.force_N)
+                hi, over[1] = (d, u, lam, res.force_N), res.force_N - force_N
+                over[0] *= 0.5 if side == 1 else 1.0
+                side = 1
         raise RuntimeError(f"finite contact: {force_N:g} N not bracketed to {rtol:g} in 60 trials")
 
     def _advance(self, u, lam, surf, t0, depth, target):
@@ -263,7 +297,7 @@ class FiniteContact:
         u, lam = u.copy(), lam.copy()
         g, n, curv = surf.distance(self._positions(u), travel)
         active = (lam > 0) | (g < -self.tol_mm)
-        last = math.inf
+        last, best, since = math.inf, math.inf, 0
         for it in range(MAX_ITER):
             f, K, G = self.nh.tangent(u)
             g, n, curv = surf.distance(self._positions(u), travel)
@@ -287,6 +321,11 @@ class FiniteContact:
             if it > 0 and feasible and (norm <= self.tol * scale or floor):
                 return u, np.where(active, lam, 0.0), it
             last = norm
+            if it > 0:                  # the first residual is the last converged state's
+                best, since = (norm, 0) if norm < best else (best, since + 1)
+                if since >= PATIENCE:
+                    raise RuntimeError(f"finite contact: no progress in {PATIENCE} Newton iterations "
+                                       f"(residual {norm:.2e}, at best {best:.2e})")
             du, new_lam = self._solve(K, G, Cf, -f[self.free], g[act])
             alpha = 1.0
             for _ in range(6):                     # no inverted element

@@ -59,7 +59,7 @@ from fem.contact.compliance import (
     FactorCompliance,
     RowCache,
 )
-from fem.contact.facets import fe_facets, node_pairs, smoothed_pressure
+from fem.contact.facets import edge_area_mm2, fe_facets, node_pairs, smoothed_pressure
 from fem.core.linalg import SERIAL_BLAS_BELOW, blas_threads
 from fem.core.materials import BONE_LAYER
 from fingertip.errors import InputError
@@ -344,20 +344,14 @@ class ContactModel:
         return self._compliance[key]
 
     def edge_area_mm2(self, result: ContactResult) -> float:
-        """Tributary area [mm^2; mm in 2D] of the contact's outer ring: the nodes carrying force
-        next to one that does not (neighbours on the facets' linear sub-facets,
-        `fem.contact.facets.node_pairs`). A node-counted contact area (and a 2D contact width)
-        moves in steps of about this as the edge crosses the next ring of nodes, so it cannot
-        resolve a change smaller than it. NaN without facets."""
+        """Tributary area [mm^2; mm in 2D] of the contact's outer ring (`fem.contact.facets.edge_area_mm2`,
+        neighbours on the facets' linear sub-facets): what a node-counted area cannot resolve. NaN
+        without facets."""
         if self.facets is None:
             return math.nan
         if self._pairs is None:
             self._pairs = node_pairs(self.facets[0], self.points_mm)
-        active, pairs = result.active, self._pairs
-        mixed = pairs[active[pairs[:, 0]] != active[pairs[:, 1]]]
-        edge = np.zeros(len(active), bool)
-        edge[mixed.ravel()] = True
-        return float(result.area_mm2[edge & active].sum())
+        return edge_area_mm2(result.active, result.area_mm2, self._pairs)
 
     def first_touch_mm(self, indentor) -> np.ndarray:
         """(n_parts,) travel at which each part first touches the undeformed candidate surface."""

@@ -76,14 +76,17 @@ class NonlinearResult:
     stopped: str | None = None
 
 
+NO_FLUID_CORE = ("the large-deformation solver has no fluid core (layer 6); "
+                 "use the linear solver for the solid-fluid models")
+
+
 class NeoHookean:
     """Nearly incompressible neo-Hookean solid on a `fem.core.model.Model` (3D tetrahedra or 2D plane
     strain; same mesh, layers, materials, regions and pressure space). Element work is done in
     chunks of `chunk` elements (the 3D tangent holds 900 numbers per element)."""
     def __init__(self, model, chunk: int = 4000):
         if (model.layer == FLUID_LAYER).any():
-            raise InputError("the large-deformation solver has no fluid core (layer 6); "
-                             "use the linear solver for the solid-fluid models")
+            raise InputError(NO_FLUID_CORE)
         self.model, self.dim, self.chunk = model, model.dim, int(chunk)
         self.grad = model.shape_gradients().transpose(2, 3, 0, 1)                             # (M, nq, nb, d)
         self.dx = model.scalar_basis.dx                                                       # (M, nq)

@@ -21,10 +21,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from fem.contact.facets import fe_facets, smoothed_pressure
 from fem.contact.finite import FiniteContact
 from fem.contact.indentors import Cylinder, Ellipsoid, Flat, Step, approach_direction, make_indentor, shapes_for
-from fem.contact.linear import MAX_DEPTH_MM, ContactModel, ContactResult, kkt_record, reach, tissue_mm
+from fem.contact.linear import MAX_DEPTH_MM, ContactModel, reach, tissue_mm
 from fem.core.fields import centroid_jacobians
 from fem.core.materials import FLUID_LAYER
 from fem.core.viscoelastic import LayerLaws
@@ -291,14 +290,13 @@ def finite_experiments(model, info, scene: Scene, progress, only: int | None = N
                        size=len(grid.points_mm)):
         sampler = ReceptorSampler(model, grid)
     fc = FiniteContact(model, CONTACT_REGION[model.dim], held_regions(model))
-    facets = fe_facets(model, CONTACT_REGION[model.dim], sn)
     for k, run in enumerate(runs):
         if only is not None and k != only:
             continue
         t0 = time.perf_counter()
         course = finite_course(fc, run, progress)
         states = {id(r): (ind, r) for _, ind, r in course}     # a hold repeats a state: once each
-        results = {k: finite_result(fc, ind, r, sn, facets, sampler) for k, (ind, r) in states.items()}
+        results = {k: fc.contact_result(ind, r, sampler) for k, (ind, r) in states.items()}
         run.steps = [(np.asarray(off, float), results[id(r)]) for off, _, r in course]
         if writes_pvd(scene.output, len(course)):
             fields = {k: (r.u, fc.element_fields(r.u)) for k, (_, r) in states.items()}
@@ -339,22 +337,6 @@ def finite_course(fc: FiniteContact, run: ExperimentRun, progress) -> list:
                 solved[f] = (fc.indent(ind, [0.0])[0] if f <= 0 else
                              fc.indent_force(ind, f, max_depth, progress=progress))
         return [(off, ind, solved[round(load.get("force_N", 0.0), 15)]) for off, load in samples]
-
-
-def finite_result(fc: FiniteContact, ind, r, sn, facets, sampler) -> ContactResult:
-    """A finite-kinematics indentation `r` of `fc` as the ContactResult of the linear path: forces per
-    candidate along the approach, deflection along it, normal gaps, the pressure of the normal
-    forces over the reference areas (nominal), the KKT check, the stored energy and the receptor
-    values of the finite state."""
-    first = float(ind.standoff(fc.X).min())
-    f = r.contact_force_N * (r.normal @ ind.approach)
-    res = ContactResult(ind.name, np.array([r.depth_mm]), np.array([first + r.depth_mm]), f, r.gap_mm,
-                        r.u[sn.dofs] @ ind.approach[:fc.model.dim], np.zeros(len(f), int),
-                        smoothed_pressure(r.contact_force_N, *facets), sn.area,
-                        kkt_record(r.contact_force_N, r.gap_mm, fc.tol_mm), _observed=fc.observe(r.u, sampler),
-                        stored_energy_Nmm=r.energy_Nmm)
-    res.kkt["iterations"] = r.iterations
-    return res
 
 
 def split_laws(law, model):

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fem.biomech.deflection import DeflectionExperiment
+from fem.contact.finite import FiniteContact
 from fem.contact.indentors import CYLINDERS_MM, make_indentor
 from fem.core.model import Model
 from fem.geometry import mesh2d
@@ -134,20 +135,24 @@ class CylinderRuns:
     volume: dict           # level -> max |fluid volume change| / fluid area
 
 
-def cylinder_runs(shop: Workshop) -> CylinderRuns:
+def cylinder_runs(shop: Workshop, kinematics: str = "linear") -> CylinderRuns:
     """C1-C8 at constant force on the cylinder with a held bone (the thesis's rigid bone), with a
     free elastic bone, and the solid-fluid cylinder. Force levels: F*, the force taking the
-    figure 4-22 cylinder 0.76 mm into the held-bone model, and F*/10 (the solid-fluid model is
-    about 15x softer: at F* it would go deeper than half its diameter)."""
+    figure 4-22 cylinder 0.76 mm into the held-bone model (linear kinematics), and F*/10 (the
+    solid-fluid model is about 15x softer: at F* it would go deeper than half its diameter).
+    kinematics 'finite': the same forces on the solid models (`fem.contact.finite`; it has no fluid
+    core, `fem.core.neohookean.NO_FLUID_CORE`)."""
     codes = list(CYLINDERS_MM)
     D = np.array([CYLINDERS_MM[c] for c in codes])
-    models = {"solid, bone held": shop.contact_model("cylinder8_bone", rigid_bone=True),
-              "solid, bone free": shop.contact_model("cylinder8_bone"),
-              "solid-fluid": shop.contact_model("cylinder8_fluid")}
-    cm_held = models["solid, bone held"][0]
+    cm_held = shop.contact_model("cylinder8_bone", rigid_bone=True)[0]
     f_star = cm_held.indent(make_indentor(f"cylinder:{FIG_4_22_DIAMETER_MM}"),
                             depth_mm=FIG_4_22_DEPTH_MM).total_force_N
     levels = {"F*": f_star, "F*/10": f_star / 10}
+    solver = shop.contact_model if kinematics == "linear" else shop.finite_contact
+    models = {"solid, bone held": solver("cylinder8_bone", rigid_bone=True),
+              "solid, bone free": solver("cylinder8_bone")}
+    if kinematics == "linear":
+        models["solid-fluid"] = solver("cylinder8_fluid")
     material = models["solid, bone held"][1].material
     E_star = material.E_MPa[1] / (1 - material.nu[1] ** 2)             # plane strain, MPa
     R2 = folder_info(shop.folder("cylinder8_bone"))["params"]["diameter_mm"] / 2
@@ -160,9 +165,9 @@ def cylinder_runs(shop: Workshop) -> CylinderRuns:
             if label == "solid-fluid" and level == "F*":
                 continue
             r = {"depth_mm": [], "width_mm": [], "width_resolution_mm": [], "max_pressure_MPa": [], "volume_change": []}
-            for code in shop.progress.bar(codes, desc=f"{label} at {level}", unit="cylinder"):
+            for code in shop.progress.bar(codes, desc=f"{label} at {level} ({kinematics})", unit="cylinder"):
                 ind = make_indentor(code)
-                res = cm.indent(ind, force_N=F, max_depth_mm=4.0)
+                res = _by_force(cm, ind, F)
                 r["depth_mm"].append(float(res.depth_mm.max()))
                 r["width_mm"].append(float(res.contact_area_mm2))
                 r["width_resolution_mm"].append(cm.edge_area_mm2(res))
@@ -175,6 +180,14 @@ def cylinder_runs(shop: Workshop) -> CylinderRuns:
             if label == "solid-fluid":
                 volume[level] = float(np.max(r["volume_change"]) / core_mm2)
     return CylinderRuns(levels, out, hertz, volume)
+
+
+def _by_force(solver, indentor, force_N: float):
+    """The ContactResult of `indentor` pressed to force_N [N/mm] (at most 4 mm) by a linear
+    ContactModel or a FiniteContact."""
+    if isinstance(solver, FiniteContact):
+        return solver.contact_result(indentor, solver.indent_force(indentor, force_N, 4.0))
+    return solver.indent(indentor, force_N=force_N, max_depth_mm=4.0)
 
 
 def _slope(D, depth):
@@ -193,9 +206,15 @@ def cylinders(shop: Workshop) -> list[Finding]:
 
 
 def cylinder_findings(runs: CylinderRuns) -> list[Finding]:
-    """Figures 4-24 and 4-25 from `cylinder_runs`: the square-root law read two ways (depth
-    proportional to sqrt(curvature), and affine in it), the solid-fluid model's depths, and the
-    contact widths and peak pressures."""
+    """Figures 4-24 and 4-25 from linear `cylinder_runs`: the depth law (`depth_findings`), the
+    solid-fluid model's depths, and the contact widths and peak pressures."""
+    kappa = 2.0 / np.array(list(CYLINDERS_MM.values()))
+    return [*depth_findings(runs), *_solid_fluid_findings(runs, kappa), *_contact_findings(runs, kappa)]
+
+
+def depth_findings(runs: CylinderRuns) -> list[Finding]:
+    """Figure 4-24 on the solid models from `cylinder_runs` (either kinematics): the square-root law
+    read two ways, depth proportional to sqrt(curvature) and affine in it."""
     D = np.array(list(CYLINDERS_MM.values()))
     kappa = 2.0 / D
     R = runs.results
@@ -244,7 +263,7 @@ def cylinder_findings(runs: CylinderRuns) -> list[Finding]:
         + ("(better than the square root)" if r2_hertz > r2_sqrt else "(no better than the square root)")
         + ". " + hertz_note, "cylinder curvature 1/R [1/mm]", "depth at constant force [mm]", series, [], logx=True,
         reading="'in proportion to the square root': depth = a + b sqrt(curvature), a straight line with an offset")
-    return [proportional, affine, *_solid_fluid_findings(runs, kappa), *_contact_findings(runs, kappa)]
+    return [proportional, affine]
 
 
 def _solid_fluid_findings(runs: CylinderRuns, kappa) -> list[Finding]:

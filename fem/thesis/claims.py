@@ -1,7 +1,8 @@
 """The source thesis's claims (chapters 4-7) in thesis order, as run by `pipeline.py reproduce`
 (fingertip/jobs/reproduce.py): each is a function of a `fem.thesis.findings.Workshop` returning `Finding`s;
 fem.thesis.chapter4_mechanics (4.1, 4.6, 4.7 and the appendices), fem.thesis.chapter4_receptors (4.2-4.4) and
-fem.thesis.chapter4_gratings (4.5) hold chapter 4, fem.thesis.chapters5_7 chapters 5-7.
+fem.thesis.chapter4_gratings (4.5) hold chapter 4, fem.thesis.chapters5_7 chapters 5-7, and
+fem.thesis.kinematics the depth-dependent ones with finite kinematics.
 """
 from __future__ import annotations
 
@@ -25,14 +26,16 @@ from fem.thesis.chapters5_7 import (
           sections_2d_3d,
           steps_3d,
 )
+from fem.thesis.kinematics import finite_claims
 
-#: (name, function, what it needs) in thesis order; `pipeline.py reproduce` runs them all.
+#: (name, function) in thesis order, then the depth-dependent claims again with finite kinematics
+#: (fem.thesis.kinematics); `pipeline.py reproduce` runs them all.
 CLAIMS = (("flamant", flamant_block), ("receptive_fields", point_load_fields), ("two_point", two_point_resolution),
           ("bars", rectangular_bars), ("gratings", aperiodic_gratings), ("gaps", gap_detection),
           ("cylinders", cylinders), ("line_load", line_load_order),
           ("contact_3d", contact_vs_diameter), ("dorsal", dorsal_half), ("layers", layer_effects),
           ("bars_3d", bars_3d), ("steps_3d", steps_3d), ("sections_2d_3d", sections_2d_3d),
-          ("appendices", appendices))
+          ("appendices", appendices), ("kinematics", finite_claims))
 
 #: Thesis figures with no run here, and why.
 NOT_RUN = (

@@ -19,12 +19,13 @@ import math
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
+from fem.contact.finite import FiniteContact
 from fem.contact.linear import ContactModel
 from fem.core.materials import Material
 from fem.geometry import mesh2d
 from fem.geometry.layered import model_from_args, params_for
 from fem.geometry.mesh3d import Sizing, run_mesh
-from fem.io.modelfolder import CONTACT_REGION, factorise, folder_info, folder_material, read_model
+from fem.io.modelfolder import CONTACT_REGION, factorise, folder_info, folder_material, held_regions, read_model
 from fingertip.progress import as_progress
 
 REPRODUCED, DIFFERS, UNCERTAIN = "reproduced", "differs", "within mesh uncertainty"
@@ -173,6 +174,7 @@ class Finding:
     logx: bool = False
     y2label: str = ""
     reading: str = ""
+    kinematics: str = "linear"
 
     def __post_init__(self):
         if not self.checks:
@@ -301,6 +303,13 @@ class Workshop:
             run_mesh(out, model_from_args(None, preset, params_for(preset)), Sizing(size_mm=size),
                      progress=self.progress)
         return out
+
+    def finite_contact(self, name: str, material: str | None = None, rigid_bone: bool = False):
+        """(fem.contact.finite.FiniteContact, Model) of model folder `name` with large-deformation
+        kinematics; material as `contact_model`'s."""
+        folder = self.folder(name)
+        model, _ = read_model(folder, material=Material(material or folder_code(folder), rigid_bone=rigid_bone))
+        return FiniteContact(model, CONTACT_REGION[model.dim], held_regions(model)), model
 
     def contact_model(self, name: str, material: str | None = None, rigid_bone: bool = False):
         """(fem.contact.linear.ContactModel, Model) of model folder `name`, factorised; material:

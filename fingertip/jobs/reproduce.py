@@ -20,6 +20,7 @@ from fem.plots import finding_figure, save
 from fem.thesis import claims as thesis
 from fem.thesis.claims import NOT_RUN
 from fem.thesis.findings import VERDICTS, Finding, Workshop, levels, number, uncertainty_factor, with_coarse
+from fem.thesis.kinematics import side_by_side
 from fingertip.errors import InputError
 from fingertip.progress import as_progress
 from fingertip.provenance import provenance
@@ -27,8 +28,8 @@ from fingertip.staging import atomic_write, check_output_dir, write_json
 
 MANIFEST = "reproduce.json"
 #: Format of reproduce.json and claims/*.json: 2 adds the checks, the two mesh levels and the provenance;
-#: 3 the checks' uncertainty factor.
-FORMAT = 3
+#: 3 the checks' uncertainty factor; 4 each finding's kinematics.
+FORMAT = 4
 
 
 def check_out(out, quick: bool) -> Path:
@@ -156,6 +157,18 @@ JUDGED = ("Every finding quotes the thesis and judges the project's numbers agai
           "if any check is, and is reproduced otherwise.")
 
 
+KINEMATICS_TEXT = ("The claims that depend on depth, with both kinematics: linear (small strain, the default) and "
+                   "finite (neo-Hookean, frictionless contact in the deformed configuration; `--kinematics finite`), "
+                   "on the same models and meshes at the same loads. The thesis's own kinematics is quoted with its "
+                   "section; 'why' gives each check's value with both, or why there is no finite run.")
+KINEMATICS_HEAD = ("thesis", "claim", "the thesis used", "linear", "finite", "why")
+
+
+def _kinematics_rows(findings):
+    return [(r["key"], r["section"], r["title"], f"{r['thesis_kinematics']}: {r['thesis_words']}", r["linear"],
+             r["finite"], r["why"]) for r in side_by_side(findings)]
+
+
 def _made_by(p: dict) -> list[str]:
     libs = ", ".join(f"{k} {v}" for k, v in p["libraries"].items())
     m = p["machine"]
@@ -171,6 +184,9 @@ def markdown_report(findings, quick: bool, made_by: dict, meshes: list[dict]) ->
           f"{counts(findings)}.", "", JUDGED, "",
           "| " + " | ".join(HEAD) + " |", "|" + "---|" * len(HEAD)]
     md += [f"| [{sec}](#{key}) | " + " | ".join(rest) + " |" for key, sec, *rest in _summary_rows(findings)]
+    md += ["", "## Both kinematics", "", KINEMATICS_TEXT, "", "| " + " | ".join(KINEMATICS_HEAD) + " |",
+           "|" + "---|" * len(KINEMATICS_HEAD)]
+    md += [f"| [{sec}](#{key}) | " + " | ".join(rest) + " |" for key, sec, *rest in _kinematics_rows(findings)]
     for f in findings:
         md += ["", f'<a id="{f.key}"></a>', "", f"## {f.section}: {f.title}", "",
                f"**Thesis ({f.section}).** \"{f.thesis}\"", ""]
@@ -215,7 +231,9 @@ def html_report(findings, quick: bool, made_by: dict, meshes: list[dict]) -> str
 
     body = [f"<h1>The thesis, claim by claim ({e(_levels_text(quick))})</h1>",
             f"<p>Every experiment of thesis chapters 4-7 this project can run: {len(findings)} findings, "
-            f"{e(counts(findings))}.</p>", f"<p>{e(JUDGED)}</p>", table(HEAD, _summary_rows(findings), link=True)]
+            f"{e(counts(findings))}.</p>", f"<p>{e(JUDGED)}</p>", table(HEAD, _summary_rows(findings), link=True),
+            "<h2>Both kinematics</h2>", f"<p>{e(KINEMATICS_TEXT)}</p>",
+            table(KINEMATICS_HEAD, _kinematics_rows(findings), link=True)]
     for f in findings:
         body += [f"<h2 id='{e(f.key)}'>{e(f.section)}: {e(f.title)}</h2>",
                  f"<p><b>Thesis ({e(f.section)}).</b> &ldquo;{e(f.thesis)}&rdquo;</p>"]

@@ -96,7 +96,7 @@ def test_reproduce_writes_a_report_and_resumes(tmp_path, monkeypatch, capsys):
     assert all(c["coarse"] is not None and c["factor"] == 6.0 for f in saved for c in f["checks"])
     assert len(list((out / "claims" / "levels").glob("*/appendices.json"))) == 2
     manifest = json.loads((out / "reproduce.json").read_text())
-    assert manifest["format"] == 3 and [lv["size2d_mm"] for lv in manifest["levels"]] == [0.25, 0.125]
+    assert manifest["format"] == 4 and [lv["size2d_mm"] for lv in manifest["levels"]] == [0.25, 0.125]
 
     def boom(shop):
         raise AssertionError("a finished claim was run again")
@@ -110,11 +110,11 @@ def test_reproduce_writes_a_report_and_resumes(tmp_path, monkeypatch, capsys):
 def test_reproduce_refuses_a_foreign_older_or_other_kind_of_folder(tmp_path, capsys):
     out = tmp_path / "report"
     out.mkdir()
-    (out / "reproduce.json").write_text(json.dumps({"format": 3, "quick": True}))
+    (out / "reproduce.json").write_text(json.dumps({"format": 4, "quick": True}))
     assert pipeline.main(["reproduce", "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("error:") and "--quick" in err[0]
-    for older in ({"quick": True}, {"format": 2, "quick": True}):      # format 2: no uncertainty factor
+    for older in ({"quick": True}, {"format": 2, "quick": True}, {"format": 3, "quick": True}):   # 3: no kinematics
         (out / "reproduce.json").write_text(json.dumps(older))
         assert pipeline.main(["reproduce", "--quick", "--out", str(out)]) == 2
         assert "older version" in capsys.readouterr().err
