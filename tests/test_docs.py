@@ -133,7 +133,7 @@ def test_quick_verdicts_agree_with_the_full_run_or_say_mesh_uncertainty():
     runs = {}
     for path, quick in ((rep.DATA, False), (rep.QUICK, True)):
         data = json.loads(path.read_text())
-        assert data["manifest"]["quick"] is quick and data["manifest"]["format"] == 3
+        assert data["manifest"]["quick"] is quick and data["manifest"]["format"] == 4
         runs[quick] = {f["key"]: Finding.from_json(f) for f in data["findings"]}
         factors = {c.factor for f in runs[quick].values() for c in f.checks if c.coarse is not None}
         assert factors == {uncertainty_factor(*levels(quick))}

@@ -60,7 +60,7 @@ def not_run_reasons() -> dict[str, str]:
     """Finding key prefix -> why reproduce has no finite run of it: the solver's own refusal
     (fluid core, wedge), or the cost of a 3D finite contact run (docs/indentation.md)."""
     wedge = _refusal(lambda: check_modelled("wedge"))
-    cost = ("not run by reproduce: a 3D finite indentation takes minutes per cylinder and depth "
+    cost = ("not run by reproduce: a 3D finite indentation takes minutes "
             "(benchmarks/finite_contact.py); run it with `indent ... --kinematics finite`")
     return {"fig4-24_solid_fluid": NO_FLUID_CORE, "fig4-25": NO_FLUID_CORE + " (the checks compare it with the solid "
             "model)", "fig6-10": wedge, "sec6-2-1_dorsal": wedge, "fig5-14": cost, "fig6-30": cost,
