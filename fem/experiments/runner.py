@@ -320,10 +320,30 @@ def finite_course(fc: FiniteContact, run: ExperimentRun, progress) -> list:
             where = "" if exp.sweep is None else f" at offset {np.round(off[exp.sweep[0]], 6):g} mm"
             with progress.task(f"{run.name}: finite contact " + (f"at {exp.force_N:g} N" if exp.force_N is not None
                                else f"to {max(exp.depth_mm):g} mm") + where, kind="finite"):
-                results = ([fc.indent_force(at, exp.force_N, max_depth, progress=progress)]
-                           if exp.force_N is not None else fc.indent(at, exp.depth_mm, progress=progress))
+                try:
+                    results = ([fc.indent_force(at, exp.force_N, max_depth, progress=progress)]
+                               if exp.force_N is not None else fc.indent(at, exp.depth_mm, progress=progress))
+                except RuntimeError as exc:
+                    raise _not_reached(run, exc, where) from None
             out += [(off, at, r) for r in results]
         return out
+    try:
+        return _finite_time_course(fc, run, progress)
+    except RuntimeError as exc:
+        raise _not_reached(run, exc) from None
+
+
+def _not_reached(run: ExperimentRun, exc: RuntimeError, where: str = "") -> InputError:
+    """The one-line error of a finite indentation whose Newton could not reach a depth (the message
+    names the depth reached); the run writes nothing."""
+    return InputError(f"experiment '{run.name}'{where}: {exc}; nothing written: ask for less depth or force, or "
+                      "use --kinematics linear")
+
+
+def _finite_time_course(fc: FiniteContact, run: ExperimentRun, progress) -> list:
+    """`finite_course` of a traced experiment: its distinct depths (or forces) solved once each."""
+    exp, ind = run.experiment, run.indentor
+    max_depth = exp.loads[0].get("max_depth_mm")
     samples = exp.indentations
     with progress.task(f"{run.name}: finite contact through its time course", kind="finite"):
         if exp.force_N is None:

@@ -288,3 +288,14 @@ def test_step_and_grating_gaps_are_distances_to_their_profile(code):
     grad = np.stack([(surf.distance(x + h * e, 0.3)[0] - surf.distance(x - h * e, 0.3)[0]) / (2 * h)
                      for e in np.eye(3)], axis=1)
     np.testing.assert_allclose(n, grad, atol=1e-5)
+
+
+def test_a_depth_newton_cannot_reach_ends_in_one_error_line(section, tmp_path, capsys):
+    """The 1.5 mm bar on m33338 stops at 1.26 mm (an active set cycling under its edge, every cut
+    step too): one `error:` line naming the depth reached, exit 2, no run folder."""
+    out = tmp_path / "run"
+    assert pipeline.main(["indent", str(section), "--indentor", "bar:1.5", "--material", "m33338", "--depth", "1.5",
+                          "--kinematics", "finite", "--out", str(out), "--quiet", "--no-plots"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error:") and "stopped at depth 1.26" in err[0]
+    assert "nothing written" in err[0] and not out.exists()
