@@ -68,7 +68,7 @@ def table(data: dict) -> str:
         lines.append(_row(cells))
     lines += ["", "Both kinematics (the claims that depend on depth; `reproduce`'s report has the same table):", "",
               "| thesis | claim | the thesis used | linear | finite | why |", "|---|---|---|---|---|---|"]
-    lines += [_row([r["section"], r["title"] + (f" ({r['key']})"), f"{r['thesis_kinematics']}: {r['thesis_words']}",
+    lines += [_row([r["section"], r["title"] + f" ({r['key']})", f"{r['thesis_kinematics']}: {r['thesis_words']}",
                     r["linear"], r["finite"], r["why"]]) for r in side_by_side(findings)]
     return "\n".join(lines + ["", END])
 

@@ -327,8 +327,20 @@ def finite_course(fc: FiniteContact, run: ExperimentRun, progress) -> list:
                     raise _not_reached(run, exc, where) from None
             out += [(off, at, r) for r in results]
         return out
+    samples = exp.indentations
     try:
-        return _finite_time_course(fc, run, progress)
+        with progress.task(f"{run.name}: finite contact through its time course", kind="finite"):
+            if exp.force_N is None:
+                depths = sorted({round(load["depth_mm"], 12) for _, load in samples})
+                solved = dict(zip(depths, fc.indent(ind, depths, progress=progress)))
+                return [(off, ind, solved[round(load["depth_mm"], 12)]) for off, load in samples]
+            solved = {}
+            for _, load in samples:
+                f = round(load.get("force_N", 0.0), 15)
+                if f not in solved:
+                    solved[f] = (fc.indent(ind, [0.0])[0] if f <= 0 else
+                                 fc.indent_force(ind, f, max_depth, progress=progress))
+            return [(off, ind, solved[round(load.get("force_N", 0.0), 15)]) for off, load in samples]
     except RuntimeError as exc:
         raise _not_reached(run, exc) from None
 
@@ -338,25 +350,6 @@ def _not_reached(run: ExperimentRun, exc: RuntimeError, where: str = "") -> Inpu
     names the depth reached); the run writes nothing."""
     return InputError(f"experiment '{run.name}'{where}: {exc}; nothing written: ask for less depth or force, or "
                       "use --kinematics linear")
-
-
-def _finite_time_course(fc: FiniteContact, run: ExperimentRun, progress) -> list:
-    """`finite_course` of a traced experiment: its distinct depths (or forces) solved once each."""
-    exp, ind = run.experiment, run.indentor
-    max_depth = exp.loads[0].get("max_depth_mm")
-    samples = exp.indentations
-    with progress.task(f"{run.name}: finite contact through its time course", kind="finite"):
-        if exp.force_N is None:
-            depths = sorted({round(load["depth_mm"], 12) for _, load in samples})
-            solved = dict(zip(depths, fc.indent(ind, depths, progress=progress)))
-            return [(off, ind, solved[round(load["depth_mm"], 12)]) for off, load in samples]
-        solved = {}
-        for _, load in samples:
-            f = round(load.get("force_N", 0.0), 15)
-            if f not in solved:
-                solved[f] = (fc.indent(ind, [0.0])[0] if f <= 0 else
-                             fc.indent_force(ind, f, max_depth, progress=progress))
-        return [(off, ind, solved[round(load.get("force_N", 0.0), 15)]) for off, load in samples]
 
 
 def split_laws(law, model):

@@ -304,16 +304,20 @@ class Workshop:
                      progress=self.progress)
         return out
 
+    def _read(self, name: str, material: str | None, rigid_bone: bool):
+        """(Model, model.json) of model folder `name` (meshed if absent) with `material` (default:
+        the folder's code, `folder_code`)."""
+        folder = self.folder(name)
+        return read_model(folder, material=Material(material or folder_code(folder), rigid_bone=rigid_bone))
+
     def finite_contact(self, name: str, material: str | None = None, rigid_bone: bool = False):
         """(fem.contact.finite.FiniteContact, Model) of model folder `name` with large-deformation
         kinematics; material as `contact_model`'s."""
-        folder = self.folder(name)
-        model, _ = read_model(folder, material=Material(material or folder_code(folder), rigid_bone=rigid_bone))
+        model, _ = self._read(name, material, rigid_bone)
         return FiniteContact(model, CONTACT_REGION[model.dim], held_regions(model)), model
 
     def contact_model(self, name: str, material: str | None = None, rigid_bone: bool = False):
         """(fem.contact.linear.ContactModel, Model) of model folder `name`, factorised; material:
         a code (default: the folder's, `folder_code`)."""
-        folder = self.folder(name)
-        model, info = read_model(folder, material=Material(material or folder_code(folder), rigid_bone=rigid_bone))
+        model, info = self._read(name, material, rigid_bone)
         return ContactModel.from_fe(model, factorise(model, info), CONTACT_REGION[model.dim]), model
