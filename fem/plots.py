@@ -257,16 +257,23 @@ def afferent_figures(name: str, resp, depth_mm) -> dict[str, Figure]:
         ax[2].step(bins[:-1], h / (0.02 * sel.size), where="post", color=CLASS_COLOURS[c], label=c)
     ax[2].set(xlabel="time, s", ylabel="mean rate, Hz")
     ax[2].legend(fontsize="small")
-    rate = resp.rates_hz()
-    mfig = Figure(figsize=(4.5 * len(classes), 4), layout="constrained")      # set before the colour bars
-    maxes = mfig.subplots(1, len(classes), squeeze=False)[0]
-    for a, c in zip(maxes, classes):
+    return {f"{name}/raster.png": fig, f"{name}/rate_map.png": rate_map_figure(resp)}
+
+
+def rate_map_figure(resp, width_in: float = 4.5) -> Figure:
+    """The mean rate of each afferent of a fem.receptors.afferents.PopulationResponse over its
+    course, at its site on the pad (x, z), one panel per class, width_in inches each."""
+    pop, rate = resp.population, resp.rates_hz()
+    cls = pop.afferent_class.astype(str)
+    classes = [c for c in CLASS_COLOURS if c in set(cls)]
+    fig = Figure(figsize=(width_in * len(classes), width_in * 8 / 9), layout="constrained")  # before colour bars
+    for a, c in zip(fig.subplots(1, len(classes), squeeze=False)[0], classes):
         sel = cls == c
         sc = a.scatter(pop.site_mm[sel, 0], pop.site_mm[sel, 2], c=rate[sel], s=14, cmap="viridis",
                        vmin=0, vmax=max(rate[sel].max(), 1e-9))
-        a.set(xlabel="x, mm", ylabel="z, mm", title=f"{c}: mean rate over {t[-1]:.2f} s", aspect="equal")
-        mfig.colorbar(sc, ax=a, label="Hz")
-    return {f"{name}/raster.png": fig, f"{name}/rate_map.png": mfig}
+        a.set(xlabel="x, mm", ylabel="z, mm", title=f"{c}: mean rate over {resp.duration_s:.2f} s", aspect="equal")
+        fig.colorbar(sc, ax=a, label="Hz")
+    return fig
 
 
 # --------------------------------------------------------------------------- biomechanics

@@ -8,11 +8,18 @@ a notebook.
     a.force_N, a.contact_area_mm2, a.max_pressure_MPa      # one indentation's numbers
     a.surface["pressure_MPa"], a.receptors["sed_MPa"]      # per contact candidate, per receptor point
     Path("here.toml").write_text(live.scene_toml(a.experiment))   # `pipeline.py indent` reproduces it
+    f = live.fire(a.experiment, "SA1")      # 3D: SA1 afferents under a ramp-and-hold to that stimulus
+    f.afferents["rate_hz"]                  # per afferent, as <experiment>/afferents.csv of `indent`
 
 An answer is `fem.experiments.runner.run_experiments` of a scene with that one experiment, answered by
 the folder's `fem.experiments.response.ResponseStore`, read into the columns of the run folder's
 tables (`fem.io.runfolder.run_tables`): the numbers `pipeline.py indent` writes for the saved scene,
 to round-off. On the monkey 1.0 mm model an answer takes about 15 ms.
+
+Afferents (`fire`) need the stress at their own sites, which the stored response model does not
+hold: each firing is `fem.experiments.runner.run_scene` of the scene `scene_toml` saves with the
+afferent class (the stimulus reached by AFFERENT_TRACE, [afferents] of that class at the published
+density over the pad), which factorises the model as `pipeline.py indent` does.
 """
 from __future__ import annotations
 
@@ -24,11 +31,20 @@ from pathlib import Path
 import numpy as np
 
 from fem.contact.facets import fe_facets
-from fem.experiments.runner import prepare_responses, run_experiments, validity_warning
+from fem.experiments.runner import (
+    prepare_responses,
+    run_experiments,
+    run_scene,
+    validity_warning,
+)
 from fem.experiments.scene import Receptors, Scene
 from fem.io.modelfolder import CONTACT_REGION, read_model
-from fem.io.runfolder import run_tables
+from fem.io.runfolder import afferent_tables, run_tables
 from fingertip.errors import InputError
+
+AFFERENT_TRACE = {"shape": "ramp_hold", "ramp_s": 0.1, "hold_s": 0.5, "release_s": 0.1, "samples": 100}
+"""The time course the explorer's afferents feel: a ramp to the stimulus's depth (or force) in
+0.1 s, held 0.5 s, released in 0.1 s ([experiment.trace], fem.experiments.traces)."""
 
 
 @dataclass
@@ -67,6 +83,23 @@ class Answer:
         return float(self.step["max_pressure_MPa"])
 
 
+@dataclass
+class Firing:
+    """The afferents of one class under AFFERENT_TRACE to one stimulus: afferents, the run's
+    afferent table (one row per afferent: class, x_mm, y_mm, z_mm of its site, depth_mm, spikes,
+    rate_hz (mean over the course), ..., as <experiment>/afferents.csv of `pipeline.py indent`), the
+    fem.receptors.afferents.PopulationResponse and the seconds it took."""
+    afferent_class: str
+    afferents: dict
+    response: object
+    seconds: float
+
+    @property
+    def firing(self) -> np.ndarray:
+        """(n,) bool: the afferents that fire at least once."""
+        return np.asarray(self.afferents["spikes"]) > 0
+
+
 class LiveModel:
     """A model folder held in memory with its stored response model, answering one experiment at a
     time. material, nu: as a scene's (default: the model's); receptors: a scene's [receptors] table
@@ -98,9 +131,19 @@ class LiveModel:
         """(m, dim) undeformed contact candidates, the rows of every answer's surface table."""
         return self.surface_nodes.x
 
-    def scene(self, experiment: dict) -> Scene:
-        """The scene of one experiment table on this model (InputError for a bad table)."""
-        return Scene.from_dict({**self.base, "experiment": [dict(experiment)]}, source="the explorer's scene")
+    def scene_dict(self, experiment: dict, afferent_class: str | None = None) -> dict:
+        """The scene of one experiment table as a dict; with afferent_class, the stimulus is reached
+        by AFFERENT_TRACE and [afferents] has that class."""
+        if afferent_class is None:
+            return {**self.base, "experiment": [dict(experiment)]}
+        return {**self.base, "afferents": {"classes": [afferent_class]},
+                "experiment": [{**experiment, "trace": dict(AFFERENT_TRACE)}]}
+
+    def scene(self, experiment: dict, afferent_class: str | None = None) -> Scene:
+        """`scene_dict` as a Scene (InputError for a bad table or class, or afferents on a 2D model)."""
+        scene = Scene.from_dict(self.scene_dict(experiment, afferent_class), source="the explorer's scene")
+        scene.check_dim(self.dim)
+        return scene
 
     def answer(self, experiment: dict) -> Answer:
         """The indentation of one [[experiment]] table with a single depth_mm or a force_N."""
@@ -119,17 +162,31 @@ class LiveModel:
         return Answer(dict(experiment), step, surface, receptors, np.asarray(run.indentor.approach, float),
                       warnings, time.perf_counter() - t0)
 
-    def scene_toml(self, experiment: dict, comment: str = "") -> str:
-        """The scene of one experiment as TOML text that `pipeline.py indent MODEL --scene FILE` runs
-        (checked by parsing it back)."""
-        self.scene(experiment)
+    def fire(self, experiment: dict, afferent_class: str, progress=None) -> Firing:
+        """The afferents of afferent_class under AFFERENT_TRACE to the stimulus of one experiment
+        table (3D models): `pipeline.py indent` of the scene `scene_toml(experiment, afferent_class)`,
+        in process (it factorises the model; progress: a `fingertip.progress` object)."""
+        scene = self.scene(experiment, afferent_class)
+        t0 = time.perf_counter()
+        run = run_scene(self.model_dir, scene, progress=progress)
+        response = run.afferents[1][scene.experiments[0].name]
+        return Firing(afferent_class, afferent_tables(response)["afferents"], response, time.perf_counter() - t0)
+
+    def scene_toml(self, experiment: dict, comment: str = "", afferent_class: str | None = None) -> str:
+        """The scene of one experiment (with afferent_class: its afferents, `scene_dict`) as TOML
+        text that `pipeline.py indent MODEL --scene FILE` runs (checked first)."""
+        self.scene(experiment, afferent_class)
+        d = self.scene_dict(experiment, afferent_class)
         lines = [f"# {line}" for line in comment.splitlines()] + [
             f"# {self.model_dir.name}: pipeline.py indent {self.model_dir} --scene <this file>"]
-        lines += [f"{key} = {toml_value(self.base[key])}" for key in ("material", "nu") if key in self.base]
-        for table in ("receptors", "output"):
-            if self.base[table]:
-                lines += ["", f"[{table}]"] + [f"{k} = {toml_value(v)}" for k, v in self.base[table].items()]
-        lines += ["", "[[experiment]]"] + [f"{k} = {toml_value(v)}" for k, v in experiment.items()]
+        lines += [f"{key} = {toml_value(d[key])}" for key in ("material", "nu") if key in d]
+        for table in ("receptors", "output", "afferents"):
+            if d.get(table):
+                lines += ["", f"[{table}]"] + [f"{k} = {toml_value(v)}" for k, v in d[table].items()]
+        exp = d["experiment"][0]
+        lines += ["", "[[experiment]]"] + [f"{k} = {toml_value(v)}" for k, v in exp.items() if k != "trace"]
+        if "trace" in exp:
+            lines += ["", "[experiment.trace]"] + [f"{k} = {toml_value(v)}" for k, v in exp["trace"].items()]
         return "\n".join(lines) + "\n"
 
 

@@ -1,15 +1,18 @@
 """The explorer's web app (trame, Vue 3 and Vuetify): controls on the left (indentor, orientation,
-position, depth or force, receptor depth and measure, colour), the pad on the right (rendered on
-the server, `fingertip.explore.picture`; drag to turn it), the numbers, the receptor map and the
-surface profile below. Every change of the stimulus is one `fem.experiments.live.LiveModel.answer`;
-a change of the receptor depth, measure or colour only redraws.
+position, depth or force, receptor depth and measure, colour, afferent class), the pad on the right
+(rendered on the server, `fingertip.explore.picture`; drag to turn it), the numbers, the receptor
+map and the surface profile below. Every change of the stimulus is one
+`fem.experiments.live.LiveModel.answer`; a change of the receptor depth, measure or colour only
+redraws. "fire afferents" (3D) runs `LiveModel.fire` for the current stimulus on its own thread
+(seconds: it factorises) and shows the afferents' rate map and numbers while the stimulus stays.
 
     serve(LiveModel("out/monkey"), port=8080, scenes_dir=Path("."))   # blocks until Ctrl+C
 
 The page's elements the tests and the latency benchmark read carry ids: `value` (the depth or
 force field), `force`, `force-exact` (repr of the force), `answers` (how many answers so far),
 `answered-at` (the server's time.time() once the picture of the latest answer was pushed), `drawn`
-(the answer whose plots are shown).
+(the answer whose plots are shown), `fire` (the button), `afferents` (the firing's numbers),
+`spikes` (the firing's total spike count).
 """
 from __future__ import annotations
 
@@ -23,7 +26,9 @@ from pathlib import Path
 
 import numpy as np
 
-from fem.plots import explorer_profile_figure, plain_numbers, receptor_map_figure
+from fem.experiments.live import AFFERENT_TRACE
+from fem.plots import explorer_profile_figure, plain_numbers, rate_map_figure, receptor_map_figure
+from fem.receptors.transduction import CLASSES
 from fingertip.errors import InputError
 from fingertip.explore.picture import COLOURS, PadPicture
 
@@ -123,6 +128,17 @@ def number_texts(live, a) -> dict:
             "pressure_text": f"{a.max_pressure_MPa:.4g} MPa", "answer_ms": f"{1e3 * a.seconds:.0f} ms"}
 
 
+def firing_text(f) -> str:
+    """The page's line on a `fem.experiments.live.Firing`."""
+    rate = np.asarray(f.afferents["rate_hz"])
+    t = AFFERENT_TRACE
+    course = f"ramp {t['ramp_s']:g} s, hold {t['hold_s']:g} s, release {t['release_s']:g} s"
+    if not f.firing.any():
+        return f"{len(rate)} {f.afferent_class} afferents, none fires ({course}; {f.seconds:.1f} s)"
+    return (f"{len(rate)} {f.afferent_class} afferents, {int(f.firing.sum())} fire: mean rate over the course "
+            f"{rate[f.firing].mean():.3g} Hz (those firing), highest {rate.max():.3g} Hz ({course}; {f.seconds:.1f} s)")
+
+
 def initial_state(live) -> dict:
     """The page's state before the first answer: C5 across the middle of the pad, 0.5 mm deep."""
     pad = live.pad_mm
@@ -132,6 +148,8 @@ def initial_state(live) -> dict:
             "receptor_depth": live.depths_mm[len(live.depths_mm) // 2], "measure": live.measures[0],
             "colour": "pressure_MPa", "click_places": True, "error": "", "warning": "", "answers": 0, "drawn": 0,
             "answered_at": 0.0, "scene_name": "explorer_scene.toml", "saved": "", "map_src": "", "profile_src": "",
+            "afferent_class": "SA1", "firing": False, "afferents_text": "", "spikes": "", "rate_map_src": "",
+            "save_afferents": False,
             **dict.fromkeys(("force_text", "force_exact", "depth_text", "area_text", "pressure_text", "answer_ms"),
                             "")}
 
@@ -147,6 +165,7 @@ class Explorer:
         self.state, self.ctrl = self.server.state, self.server.controller
         self.picture, self.plots = PadPicture(live), Plots(live)
         self.plotting = ThreadPoolExecutor(1, thread_name_prefix="plots")    # one figure at a time
+        self.firing = ThreadPoolExecutor(1, thread_name_prefix="afferents")   # one firing at a time
         self.held = None                                                     # the latest Answer
         self.state.update(initial_state(live))
         self.state.change("indentor", "orientation_deg", "x_mm", "z_mm", "control", "value")(self.answer)
@@ -167,6 +186,8 @@ class Explorer:
             return
         self.held = a
         state.error, state.warning = "", " ".join(a.warnings)
+        if state.rate_map_src or state.afferents_text:     # a firing belongs to the stimulus before
+            state.rate_map_src, state.afferents_text, state.spikes = "", "", ""
         state.update(number_texts(self.live, a))
         self.picture.show(a, state.colour)
         self.ctrl.view_update()              # renders and pushes the picture
@@ -197,6 +218,40 @@ class Explorer:
             self.picture.show(self.held, self.state.colour)
             self.ctrl.view_update()
 
+    def fire(self):
+        """The afferents of the chosen class under AFFERENT_TRACE to the current stimulus, fired on
+        the afferent thread; shown if the stimulus has not changed meanwhile."""
+        from trame.app import asynchronous
+        state = self.state
+        try:
+            experiment = experiment_of(self.live, state)
+            self.live.scene(experiment, state.afferent_class)
+        except InputError as exc:
+            state.afferents_text = str(exc)
+            return
+        state.firing, state.rate_map_src, state.spikes = True, "", ""
+        state.afferents_text = f"firing the {state.afferent_class} afferents (the model is factorised: seconds)"
+        asynchronous.create_task(self.show_firing(experiment, state.afferent_class, state.answers))
+
+    async def show_firing(self, experiment: dict, afferent_class: str, answers: int):
+        """Fire on the afferent thread, then show the rate map and numbers of answer `answers`."""
+        def work():
+            f = self.live.fire(experiment, afferent_class)
+            return f, png_url(rate_map_figure(f.response, width_in=4.4))
+        try:
+            f, url = await asyncio.get_running_loop().run_in_executor(self.firing, work)
+        except InputError as exc:
+            with self.state:
+                self.state.firing, self.state.afferents_text = False, str(exc)
+            return
+        with self.state:
+            self.state.firing = False
+            if answers != self.state.answers:
+                self.state.afferents_text = "the stimulus changed while the afferents fired: fire again"
+                return
+            self.state.afferents_text, self.state.rate_map_src = firing_text(f), url
+            self.state.spikes = str(int(np.sum(f.afferents["spikes"])))
+
     def place(self, event):
         """A click on the picture: the indentor moves to the pad point under it."""
         if not self.state.click_places or not isinstance(event, dict) or "position" not in event:
@@ -213,7 +268,8 @@ class Explorer:
             self.state.saved = f"give a file name ending in .toml (no folder): it is saved in {self.scenes_dir}"
             return
         try:
-            text = self.live.scene_toml(experiment_of(self.live, self.state), comment="saved by pipeline.py explore")
+            text = self.live.scene_toml(experiment_of(self.live, self.state), comment="saved by pipeline.py explore",
+                                        afferent_class=self.state.afferent_class if self.state.save_afferents else None)
         except InputError as exc:
             self.state.saved = str(exc)
             return
@@ -253,6 +309,14 @@ def page(ex: Explorer) -> None:
                        **compact)
             v3.VSelect(label="colour the pad by", v_model=("colour",),
                        items=("colours", [{"title": t, "value": k} for k, t in COLOURS.items()]), **compact)
+            if live.dim == 3:
+                v3.VSelect(label="afferent class", v_model=("afferent_class",), items=("classes", list(CLASSES)),
+                           id="afferent-class", **compact)
+                v3.VBtn("fire afferents", click=ex.fire, id="fire", block=True, loading=("firing",),
+                        disabled=("firing",), classes="mb-1")
+                html.Div("{{ afferents_text }}", id="afferents", classes="text-caption mb-2")
+                v3.VSwitch(label="save with the afferents (ramp and hold)", v_model=("save_afferents",),
+                           id="save-afferents", color="primary", hide_details=True, **compact)
             v3.VTextField(label=f"save as scene in {ex.scenes_dir}", v_model=("scene_name",), id="scene-name",
                           **compact)
             v3.VBtn("save as scene", click=ex.save_scene, id="save", block=True)
@@ -286,8 +350,9 @@ def views(ex: Explorer) -> None:
                         html.Td(f"{{{{ {key} }}}}", id=ident)
             html.Img(src=("map_src",), style="width: 100%; max-width: 440px")
             html.Img(src=("profile_src",), style="width: 100%; max-width: 440px")
+            html.Img(src=("rate_map_src",), v_if="rate_map_src", style="width: 100%; max-width: 440px")
     for key, ident in (("force_exact", "force-exact"), ("answers", "answers"), ("answered_at", "answered-at"),
-                       ("drawn", "drawn")):
+                       ("drawn", "drawn"), ("spikes", "spikes")):
         html.Span(f"{{{{ {key} }}}}", id=ident, style="display: none")
 
 

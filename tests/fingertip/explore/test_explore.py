@@ -1,6 +1,7 @@
 """The live explorer: its answers are the command line's (a saved scene run by `indent`, factorised,
 gives the same force and receptor measures to 1e-9), bad input is refused before any work, and
-the web app driven in a real headless browser shows the force of the depth typed into it."""
+the web app driven in a real headless browser shows the force of the depth typed into it and the
+spikes of the afferents `indent` fires for the scene it saves with them."""
 from __future__ import annotations
 
 import os
@@ -58,11 +59,25 @@ def test_one_indentation_only(cyl8):
         live.answer({"indentor": "not-a-code", "depth_mm": [0.2]})
 
 
+def test_afferents_need_a_pad(cyl8):
+    live = LiveModel(cyl8)
+    with pytest.raises(InputError, match="3D model"):
+        live.scene_toml({"indentor": "C5", "depth_mm": [0.5]}, afferent_class="SA1")
+
+
 def test_toml_values():
     assert toml_value('bar "x"\\') == '"bar \\"x\\"\\\\"'
     assert toml_value([1, 2.5, True]) == "[1, 2.5, true]"
     with pytest.raises(InputError, match="finite"):
         toml_value(float("inf"))
+
+
+def count_sa1(model) -> int:
+    """SA1 afferents a scene places over the whole pad of a model folder (the published density)."""
+    from fem.io.modelfolder import CONTACT_REGION, read_model
+    from fem.receptors.afferents import place
+    m, _ = read_model(model)
+    return len(place(m, m.surface_nodes(CONTACT_REGION[3]), ("SA1",)))
 
 
 def free_port() -> int:
@@ -130,6 +145,9 @@ def test_the_browser_shows_the_command_lines_force(tmp_path):
                 return browser.find_element(By.ID, ident).get_attribute("textContent").strip()
             except Exception:
                 return ""
+
+        def click(ident):                     # in the page's script: the drawer may scroll under the footer
+            browser.execute_script("arguments[0].click()", browser.find_element(By.ID, ident))
         _wait(lambda: text("force-exact"))
         first = float(text("force-exact"))
         field = browser.find_element(By.ID, "value")
@@ -139,12 +157,21 @@ def test_the_browser_shows_the_command_lines_force(tmp_path):
         force = float(text("force-exact"))
         assert force > first > 0
         assert text("force").endswith(" N") and text("area").endswith("mm²") and text("pressure").endswith("MPa")
-        browser.find_element(By.ID, "save").click()
+        click("save")
         _wait(lambda: text("saved").startswith("saved"))
         saved = scenes / "explorer_scene.toml"
         assert load_scene(saved).experiments[0].depth_mm == (1.25,)
         reference, _ = factorised(model, saved)
         assert force == pytest.approx(reference, rel=1e-9)
+        click("fire")                   # SA1 under a ramp and hold
+        spikes = int(_wait(lambda: text("spikes"), timeout_s=300))
+        assert text("afferents").startswith(f"{count_sa1(model)} SA1 afferents")
+        click("save-afferents")
+        name = browser.find_element(By.ID, "scene-name")
+        name.send_keys(Keys.CONTROL, "a")
+        name.send_keys("afferents.toml")
+        click("save")
+        _wait(lambda: text("saved").endswith("afferents.toml"))
     finally:
         if browser is not None:
             browser.quit()
@@ -152,5 +179,11 @@ def test_the_browser_shows_the_command_lines_force(tmp_path):
         server.wait(timeout=30)
     written = snapshot(model) - before
     assert written and all(Path(p).relative_to(model).parts[0] == "response" for p in written)
-    assert not any(cwd.iterdir()) and sorted(p.name for p in scenes.iterdir()) == ["explorer_scene.toml"]
+    assert not any(cwd.iterdir())
+    assert sorted(p.name for p in scenes.iterdir()) == ["afferents.toml", "explorer_scene.toml"]
     shutil.rmtree(model / "response")
+    run = tmp_path / "run"                      # the command line fires the same spikes
+    assert cli("indent", model, "--scene", scenes / "afferents.toml", "--out", run, "--quiet").code == 0
+    table = np.genfromtxt(run / "experiment1" / "afferents.csv", delimiter=",", names=True, dtype=None,
+                          encoding="utf-8")
+    assert spikes > 0 and int(table["spikes"].sum()) == spikes
