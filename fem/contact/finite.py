@@ -56,6 +56,9 @@ MAX_ITER = 40
 PATIENCE = 6
 """Newton iterations in a row without a new smallest residual after which a step is given up (and
 cut): an active set cycling at the edge of the contact, or a diverging iterate, never recovers."""
+QUADRATIC = (1e-3, 1e-8)
+"""A residual at most QUADRATIC[0] of the one before and QUADRATIC[1] of the contact force ends the
+iteration: Newton converges quadratically there, so one more step would only reach round-off."""
 
 
 @dataclass
@@ -316,9 +319,10 @@ class FiniteContact:
             scale = max(float(np.abs(lam).sum()), 1e-300)
             norm = float(np.linalg.norm(fr))
             floor = it > 1 and norm > 0.5 * last and norm <= 1e-6 * scale        # round-off reached
+            quadratic = norm <= QUADRATIC[0] * last and norm <= QUADRATIC[1] * scale  # the next step: round-off
             feasible = (np.all(np.abs(g[act]) <= self.tol_mm) and np.all(lam[act] >= 0)
                         and np.all(g[~active] >= -self.tol_mm))
-            if it > 0 and feasible and (norm <= self.tol * scale or floor):
+            if it > 0 and feasible and (norm <= self.tol * scale or floor or quadratic):
                 return u, np.where(active, lam, 0.0), it
             last = norm
             if it > 0:                  # the first residual is the last converged state's
