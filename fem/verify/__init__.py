@@ -1,8 +1,9 @@
 """References the solver is verified against: closed-form elasticity solutions (Hertz, Lame,
 Flamant, Boussinesq, Sneddon, the waterbed and beam profiles of thesis 6.2) with the structured
-meshes they are checked on, and a half-space block under a flat punch.
+meshes they are checked on, a half-space block under a flat punch, and the work of an indentor
+(what frictionless contact stores).
 
-Modules: closed_forms, halfspace (flat_block_model).
+Modules: closed_forms, halfspace (flat_block_model), energy (indentation_work_Nmm).
 """
 from fingertip.lazy import lazy_exports
 
@@ -11,7 +12,7 @@ _EXPORTS = {
     "lame_sphere": "fem.verify.closed_forms", "flamant": "fem.verify.closed_forms",
     "boussinesq": "fem.verify.closed_forms", "sneddon_punch_force_N": "fem.verify.closed_forms",
     "waterbed_deflection": "fem.verify.closed_forms", "beam_deflection": "fem.verify.closed_forms",
-    "flat_block_model": "fem.verify.halfspace"
+    "flat_block_model": "fem.verify.halfspace", "indentation_work_Nmm": "fem.verify.energy",
 }
 """Public name -> the module that defines it (imported at first use: `fingertip.lazy`)."""
 __all__ = sorted(_EXPORTS)
