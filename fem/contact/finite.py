@@ -21,7 +21,9 @@ the mixed u-p tangent bordered by the active constraints,
 profile's curvature at the closest point for a step; the
 pressure block as in NeoHookean), and then moves the active set: nodes whose multiplier turns
 negative leave, nodes that penetrate by more than GAP_TOL_MM join. It stops when the active set
-is stable, the free residual is below `tol` of the contact force and every gap is within GAP_TOL_MM,
+is stable, the free residual is below `tol` of the contact force (1e-8: the solves skip iterative
+refinement, so the last iterations converge linearly, and each further digit of the residual costs
+about one more tangent while the force is settled to 9-10 digits) and every gap is within GAP_TOL_MM,
 so the constraint holds to the linear solver's tolerance (`fem.contact.linear.GAP_TOL_MM`): no
 penalty stiffness to tune and no penetration left by one, and sliding of the skin along a curved
 indentor comes with the normal projection. (Mortar methods pay off between two deformable bodies
@@ -56,9 +58,6 @@ MAX_ITER = 40
 PATIENCE = 6
 """Newton iterations in a row without a new smallest residual after which a step is given up (and
 cut): an active set cycling at the edge of the contact, or a diverging iterate, never recovers."""
-QUADRATIC = (1e-3, 1e-8)
-"""A residual at most QUADRATIC[0] of the one before and QUADRATIC[1] of the contact force ends the
-iteration: Newton converges quadratically there, so one more step would only reach round-off."""
 
 
 @dataclass
@@ -84,7 +83,7 @@ class FiniteContact:
     candidate nodes of `region` with a rigid indentor; held: the regions held fixed (as
     `Model.system`'s prescribed, zero displacement)."""
 
-    def __init__(self, model, region: str, held: dict, tol_mm: float = GAP_TOL_MM, tol: float = 1e-10):
+    def __init__(self, model, region: str, held: dict, tol_mm: float = GAP_TOL_MM, tol: float = 1e-8):
         self.model, self.nh, self.tol_mm, self.tol = model, NeoHookean(model), tol_mm, tol
         self._factor = None             # the last tangent's factorisation: its analysis serves the next
         self.sn = model.surface_nodes(region)
@@ -319,10 +318,9 @@ class FiniteContact:
             scale = max(float(np.abs(lam).sum()), 1e-300)
             norm = float(np.linalg.norm(fr))
             floor = it > 1 and norm > 0.5 * last and norm <= 1e-6 * scale        # round-off reached
-            quadratic = norm <= QUADRATIC[0] * last and norm <= QUADRATIC[1] * scale  # the next step: round-off
             feasible = (np.all(np.abs(g[act]) <= self.tol_mm) and np.all(lam[act] >= 0)
                         and np.all(g[~active] >= -self.tol_mm))
-            if it > 0 and feasible and (norm <= self.tol * scale or floor or quadratic):
+            if it > 0 and feasible and (norm <= self.tol * scale or floor):
                 return u, np.where(active, lam, 0.0), it
             last = norm
             if it > 0:                  # the first residual is the last converged state's
