@@ -16,9 +16,10 @@ the mixed u-p tangent bordered by the active constraints,
     [ G                      -D     0   ] [dp] = [ 0                   ]
     [-C                       0     0   ] [lam]  [ g_active            ]
 
-(C: the active nodes' normals; H_i = k_i (I - n n^T) with k_i the curvature of the gap's level set,
-1 / |x - c|_perp for a round indentor, 1 / distance from the edge around a flat one's edge, the
-profile's curvature at the closest point for a step; the
+(C: the active nodes' normals; H_i = k_i (I - n n^T - t t^T), the Hessian of the gap, with k_i
+the curvature of the gap's level set, 1 / |x - c|_perp for a round indentor, 1 / distance from the
+edge around a flat one's edge, the profile's curvature at the closest point for a step, and t
+its straight direction in 3D: a cylinder's axis, the edge's line, the step's length axis; the
 pressure block as in NeoHookean), and then moves the active set: nodes whose multiplier turns
 negative leave, nodes that penetrate by more than GAP_TOL_MM join. It stops when the active set
 is stable, the free residual is below `tol` of the contact force (1e-8: the solves skip iterative
@@ -276,7 +277,7 @@ class FiniteContact:
         return u, lam, iterations
 
     def _result(self, u, lam, surf, travel, depth, iterations) -> FiniteResult:
-        g, n, _ = surf.distance(self._positions(u), travel)
+        g, n, _, _ = surf.distance(self._positions(u), travel)
         force = float(np.sum(lam * (n @ surf.approach)))
         J = self.nh.jacobian(u)
         return FiniteResult(float(depth), force, u.copy(), lam.copy(), g, n, self.nh.stored_energy(u),
@@ -297,17 +298,18 @@ class FiniteContact:
         """(u, lambda (m,), iterations) at one travel, from the last state (module notes)."""
         dim, m = self.model.dim, len(self.dofs)
         u, lam = u.copy(), lam.copy()
-        g, n, curv = surf.distance(self._positions(u), travel)
+        g = surf.distance(self._positions(u), travel)[0]
         active = (lam > 0) | (g < -self.tol_mm)
         last, best, since = math.inf, math.inf, 0
         for it in range(MAX_ITER):
             f, K, G = self.nh.tangent(u)
-            g, n, curv = surf.distance(self._positions(u), travel)
+            g, n, curv, straight = surf.distance(self._positions(u), travel)
             act = np.flatnonzero(active)
-            # contact curvature -lambda k (I - n n^T) on the active nodes' DOF blocks
+            # contact curvature -lambda k (I - n n^T - t t^T) on the active nodes' DOF blocks
             bent = act[(lam[act] > 0) & (curv[act] != 0)]
-            nn = n[bent, :dim]
-            H = -(lam[bent] * curv[bent])[:, None, None] * (np.eye(dim) - nn[:, :, None] * nn[:, None, :])
+            nn, tt = n[bent, :dim], straight[bent, :dim]
+            H = -(lam[bent] * curv[bent])[:, None, None] * (np.eye(dim) - nn[:, :, None] * nn[:, None, :]
+                                                            - tt[:, :, None] * tt[:, None, :])
             d = self.dofs[bent]
             K = K + sp.csr_matrix((H.ravel(), (np.repeat(d, dim, axis=1).ravel(), np.tile(d, (1, dim)).ravel())),
                                   shape=K.shape)

@@ -1,7 +1,9 @@
 """Rigid indentors as closed-form surfaces for large-deformation contact (`fem.contact.finite`):
 the signed distance of points to the indentor's solid, its gradient (the contact normal, from the
 indentor towards the point) and the curvature of its level set at the point (the contact's
-geometric stiffness).
+geometric stiffness): the Hessian of the distance is k (I - n n^T - t t^T), k the curvature and
+t the level set's straight direction (a cylinder's axis, the line of a bar's edge, a step's length
+axis; zero where the level set curves every way, around a sphere or a plate's corner).
 
 An indentor is the union of the solids of its pieces, so its gap is the smallest of their signed
 distances, with that piece's normal and curvature. Pieces, each placed at its tip (the part's
@@ -23,7 +25,7 @@ two-point stimuli with spherical tips. Wedges, cones (sharp edges and tips: the 
 the nodes, measured in docs/indentation.md), finite cylinders and general ellipsoids are refused.
 
     surf = RigidSurface(make_indentor("step:2", orientation="parallel"))
-    gap_mm, normal, curvature = surf.distance(x, travel_mm=0.5)        # x (n, 3) mm
+    gap_mm, normal, curvature, straight = surf.distance(x, travel_mm=0.5)   # x (n, 3) mm
 """
 from __future__ import annotations
 
@@ -46,10 +48,12 @@ class Round:
 
     def distance(self, rel, a):
         r = rel + self.radius_mm * a                          # from the axis or centre
+        straight = np.zeros_like(r)
         if self.axis is not None:
             r = r - np.outer(r @ self.axis, self.axis)
+            straight[:] = self.axis
         rho = np.linalg.norm(r, axis=1)
-        return rho - self.radius_mm, r / rho[:, None], 1.0 / rho
+        return rho - self.radius_mm, r / rho[:, None], 1.0 / rho, straight
 
 
 class Box:
@@ -63,29 +67,37 @@ class Box:
     def distance(self, rel, a):
         ahead = rel @ a                                      # beyond the face, along the approach
         lateral = rel - np.outer(ahead, a)
-        side, out_dir, k_side = self._beyond_sides(lateral)
+        side, out_dir, k_side, rim = self._beyond_sides(lateral)
         corner = (ahead > 0) & (side > 0)
         g = np.where(corner, np.hypot(ahead, side), np.maximum(ahead, side))
         n = np.where((ahead >= side)[:, None], a, out_dir)
         k = np.where(ahead >= side, 0.0, k_side)
-        if corner.any():
+        straight = np.where((ahead >= side)[:, None], 0.0, a)  # beside: the sides' level sets run along a
+        if corner.any():                                     # around the rim: a tube along it
             n[corner] = (ahead[corner, None] * a + side[corner, None] * out_dir[corner]) / g[corner, None]
             k[corner] = 1.0 / g[corner]
-        return g, n, k
+            straight[corner] = rim[corner]
+        return g, n, k, straight
 
     def _beyond_sides(self, lateral):
         """(signed distance (n,) beyond the sides in the face's plane, unit direction (n, 3) out
-        of them, curvature (n,) of that distance's level set: 1 / distance around a plate's
-        corner, else 0) of lateral offsets (n, 3) from the tip."""
+        of them, curvature (n,) of that distance's level set in the plane: 1 / distance around a
+        plate's corner or a punch's axis, else 0; the direction (n, 3) of the face's rim nearest:
+        e1 along a bar or an edge, the circle's tangent around a punch (whose own curvature, at
+        most 1 / radius, the tube around it leaves out), zero at a plate's corner) of lateral
+        offsets (n, 3) from the tip."""
         n = len(lateral)
         if self.kind == "edge":
-            return lateral @ self.e2, np.tile(self.e2, (n, 1)), np.zeros(n)
+            return lateral @ self.e2, np.tile(self.e2, (n, 1)), np.zeros(n), np.tile(self.e1, (n, 1))
         if self.kind == "plate":
             return self._beyond_rectangle(lateral)
         if self.kind == "bar":
             lateral = np.outer(lateral @ self.e2, self.e2)
         dist = np.linalg.norm(lateral, axis=1)
-        return dist - self.half_mm, lateral / np.maximum(dist, 1e-300)[:, None], np.zeros(n)
+        out = lateral / np.maximum(dist, 1e-300)[:, None]
+        if self.kind == "bar":
+            return dist - self.half_mm, out, np.zeros(n), np.tile(self.e1, (n, 1))
+        return dist - self.half_mm, out, 1.0 / np.maximum(dist, 1e-300), np.cross(np.cross(self.e1, self.e2), out)
 
     def _beyond_rectangle(self, lateral):
         (hl, hw), e1, e2 = self.half_mm, self.e1, self.e2
@@ -97,7 +109,9 @@ class Box:
         side = np.where(both, np.hypot(dx, dy), np.maximum(dx, dy))
         out_dir = np.where((dx >= dy)[:, None], ex, ey)
         out_dir[both] = (dx[both, None] * ex[both] + dy[both, None] * ey[both]) / side[both, None]
-        return side, out_dir, np.where(both, 1.0 / np.where(both, side, 1.0), 0.0)
+        rim = np.where((dx >= dy)[:, None], e2, e1)
+        rim[both] = 0.0
+        return side, out_dir, np.where(both, 1.0 / np.where(both, side, 1.0), 0.0), rim
 
 
 class Setback:
@@ -108,7 +122,7 @@ class Setback:
 
     def distance(self, rel, a):
         n = len(rel)
-        return rel @ a + self.setback_mm, np.tile(a, (n, 1)), np.zeros(n)
+        return rel @ a + self.setback_mm, np.tile(a, (n, 1)), np.zeros(n), np.zeros((n, 3))
 
 
 class Ramp:
@@ -158,7 +172,7 @@ class Ramp:
         kappa = h2 / norm ** 3                                # > 0 where the solid is convex
         bend = 1.0 + kappa * g
         k = np.where(bend > 0.1, kappa / np.where(bend > 0.1, bend, 1.0), 0.0)
-        return g, nv[:, None] * self.e2 + nw[:, None] * a, k
+        return g, nv[:, None] * self.e2 + nw[:, None] * a, k, np.tile(np.cross(self.e2, a), (len(v), 1))
 
 
 class RigidSurface:
@@ -177,8 +191,9 @@ class RigidSurface:
 
     def distance(self, x, travel_mm: float):
         """(gap (n,) mm, normal (n, 3) from the indentor towards the point, curvature (n,) [1/mm]
-        of the gap's level set at the point) of points x (n, 3) when the tips have travelled
-        travel_mm along the approach: the nearest piece's."""
+        of the gap's level set at the point, its straight direction (n, 3) (unit, or zero: the
+        module docstring)) of points x (n, 3) when the tips have travelled travel_mm along the
+        approach: the nearest piece's."""
         a = self.approach
         parts = [piece.distance(x - (tip + travel_mm * a), a) for tip, piece in self.pieces]
         if len(parts) == 1:
@@ -186,8 +201,7 @@ class RigidSurface:
         g = np.stack([p[0] for p in parts])
         near = np.argmin(g, axis=0)
         rows = np.arange(g.shape[1])
-        return (g[near, rows], np.stack([p[1] for p in parts])[near, rows],
-                np.stack([p[2] for p in parts])[near, rows])
+        return (g[near, rows], *(np.stack([p[k] for p in parts])[near, rows] for k in (1, 2, 3)))
 
 
 def check_modelled(spec: str) -> None:

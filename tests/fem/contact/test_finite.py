@@ -251,11 +251,36 @@ def test_plate_gap_is_the_signed_distance_to_its_box():
         rel = y - surf.tip
         d = np.stack([np.abs(rel @ ind.e1) - 2.0, np.abs(rel @ ind.e2) - 2.0, rel @ ind.approach], axis=1)
         return np.where(d.max(axis=1) > 0, np.linalg.norm(np.maximum(d, 0), axis=1), d.max(axis=1))
-    g, n, _ = surf.distance(x, 0.0)
+    g, n, *_ = surf.distance(x, 0.0)
     np.testing.assert_allclose(g, sdf(x), atol=1e-12)
     h = 1e-6
     grad = np.stack([(sdf(x + h * e) - sdf(x - h * e)) / (2 * h) for e in np.eye(3)], axis=1)
     np.testing.assert_allclose(n, grad, atol=1e-5)
+
+
+@pytest.mark.parametrize("code", ["C5", "sphere:3", "bar:2", "plate:4", "punch:3", "step:0", "step:2"])
+def test_curvature_is_the_hessian_of_the_gap(code):
+    """The geometric stiffness of finite contact is the gap's Hessian: the derivative of the normal
+    (central differences, 1e-6 mm) equals k (I - n n^T - t t^T) with the curvature k and straight
+    direction t the surface returns (a cylinder's axis, a bar's edge line, a punch's rim tangent, up
+    to the rim's own curvature, at most 1 / radius), at points outside the solid in any
+    placement. Before t (I - n n^T alone) a cylinder across the 1 mm monkey converged linearly from
+    0.7 mm and not at all at 1 mm."""
+    from fem.contact.surfaces import RigidSurface
+    ind = make_indentor(code, orientation=25.0, approach=[0.1, -1.0, 0.2])
+    surf = RigidSurface(ind)
+    x = surf.tip + np.random.default_rng(3).uniform(-3, 3, (500, 3))
+    g, n, k, t = surf.distance(x, 0.3)
+    h = 1e-6
+    dn = np.stack([(surf.distance(x + h * e, 0.3)[1] - surf.distance(x - h * e, 0.3)[1]) / (2 * h)
+                   for e in np.eye(3)], axis=2)                        # (n, 3, 3): d n_i / d x_j
+    hess = k[:, None, None] * (np.eye(3) - n[:, :, None] * n[:, None, :] - t[:, :, None] * t[:, None, :])
+    # away from the pieces' seams (where the nearest piece changes, the normal jumps)
+    smooth = np.array([np.abs(surf.distance(x[i] + h * np.eye(3), 0.3)[1] - n[i]).max() < 1e-4 for i in range(len(x))])
+    ok = (g > 0.05) & smooth
+    assert ok.sum() > 100
+    atol = 1.0 / 1.5 if code.startswith("punch") else 1e-4            # the rim's own curvature
+    np.testing.assert_allclose(hess[ok], dn[ok], atol=atol)
 
 
 def _profile_boundary(code) -> np.ndarray:
@@ -287,7 +312,7 @@ def test_step_and_grating_gaps_are_distances_to_their_profile(code):
     ind = make_indentor(code, orientation=20.0, approach=[0.1, -1.0, 0.2])
     surf = RigidSurface(ind)
     x = surf.tip + np.random.default_rng(2).uniform(-3, 3, (600, 3))
-    g, n, _ = surf.distance(x, 0.3)
+    g, n, *_ = surf.distance(x, 0.3)
     rel = x - (surf.tip + 0.3 * ind.approach)
     vw = np.column_stack([rel @ ind.e2, rel @ ind.approach])
     boundary = _profile_boundary(code)
