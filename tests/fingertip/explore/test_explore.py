@@ -183,7 +183,7 @@ def test_the_browser_shows_the_command_lines_force(tmp_path):
     assert sorted(p.name for p in scenes.iterdir()) == ["afferents.toml", "explorer_scene.toml"]
     shutil.rmtree(model / "response")
     run = tmp_path / "run"                      # the command line fires the same spikes
-    assert cli("indent", model, "--scene", scenes / "afferents.toml", "--out", run, "--quiet").code == 0
+    assert cli("indent", model, "--scene", scenes / "afferents.toml", "--out", run, "--no-plots", "--quiet").code == 0
     table = np.genfromtxt(run / "experiment1" / "afferents.csv", delimiter=",", names=True, dtype=None,
                           encoding="utf-8")
     assert spikes > 0 and int(table["spikes"].sum()) == spikes
