@@ -5,6 +5,7 @@
   indentor, the integral of its force over depth from first touch, against the stored strain
   energy `energy_Nmm` of the step table (frictionless contact stores the work), the integral
   by `fem.verify.energy.indentation_work_Nmm` (a power law on the first interval, then Simpson);
+  with --energy-3d MODEL also on a 3D model folder, C5 across the finger, 0.05:1.5:0.05 mm;
 - mesh convergence at 2 mm: finite kinematics at three sizes (`--sizes`, default 0.25, 0.125
   and 0.0625 mm; each halving refines every layer), force and receptor strain energy density at
   0.75 mm depth, under the cylinder's axis (the point 0.75 mm below the apex, the same on every
@@ -16,7 +17,7 @@ Every run goes through `run_scene`, the command line's path; meshes are built an
 (`build_folder`). Prints the tables with run times and writes
 benchmarks/results/finite_verification.md.
 
-    python benchmarks/finite_verification.py [--sizes 0.25 0.125 0.0625] [--energy-size 0.125] [--no-write]
+    python benchmarks/finite_verification.py [--sizes 0.25 0.125 0.0625] [--energy-size 0.125] [--energy-3d MODEL] [--no-write]
 """
 from __future__ import annotations
 
@@ -41,6 +42,7 @@ from fem.verify.energy import indentation_work_Nmm  # noqa: E402
 MATERIAL = "m43338"
 RECEPTOR_DEPTH_MM = 0.75
 ENERGY_DEPTHS = "0.05:2:0.05"
+ENERGY_DEPTHS_3D = "0.05:1.5:0.05"
 
 
 def cylinder(work: Path, size_mm: float) -> Path:
@@ -50,12 +52,13 @@ def cylinder(work: Path, size_mm: float) -> Path:
     return folder
 
 
-def run(folder: Path, depths, kinematics: str) -> tuple[dict, float]:
-    """(step table, seconds) of C5 at `depths` with `kinematics`, receptors at RECEPTOR_DEPTH_MM."""
+def run(folder: Path, depths, kinematics: str, across: bool = False) -> tuple[dict, float]:
+    """(step table, seconds) of C5 at `depths` with `kinematics`, receptors at RECEPTOR_DEPTH_MM;
+    across: perpendicular to the finger (3D)."""
+    experiment = {"name": "C5", "indentor": "C5", "depth_mm": depths} | ({"orientation": "perpendicular"} if across else {})
     scene = Scene.from_dict({"material": MATERIAL, "kinematics": kinematics,
                              "receptors": {"depths_mm": [RECEPTOR_DEPTH_MM], "measures": ["sed_MPa"]},
-                             "output": {"pvd": False, "plots": False},
-                             "experiment": [{"name": "C5", "indentor": "C5", "depth_mm": depths}]})
+                             "output": {"pvd": False, "plots": False}, "experiment": [experiment]})
     t0 = time.perf_counter()
     sr = run_scene(folder, scene)
     seconds = time.perf_counter() - t0
@@ -67,10 +70,10 @@ def run(folder: Path, depths, kinematics: str) -> tuple[dict, float]:
     return steps, seconds
 
 
-def energy_table(folder: Path) -> tuple[list[str], dict]:
+def energy_table(folder: Path, depths: str = ENERGY_DEPTHS, across: bool = False) -> tuple[list[str], dict]:
     rows, worst = {}, {}
     for kinematics in ("linear", "finite"):
-        steps, seconds = run(folder, ENERGY_DEPTHS, kinematics)
+        steps, seconds = run(folder, depths, kinematics, across)
         d, f, e = steps["depth_mm"], steps["force_N"], steps["energy_Nmm"]
         ratio = indentation_work_Nmm(d, f) / e - 1.0
         rows[kinematics] = (d, f, e, ratio)
@@ -117,6 +120,8 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--sizes", nargs="+", type=float, default=[0.25, 0.125, 0.0625])
     ap.add_argument("--energy-size", type=float, default=0.125)
+    ap.add_argument("--energy-3d", type=Path, help="a 3D model folder: the energy balance there too, C5 across "
+                    f"the finger, {ENERGY_DEPTHS_3D} mm (minutes: each Newton iteration factorises)")
     ap.add_argument("--no-write", action="store_true")
     args = ap.parse_args(argv)
     logging.getLogger("fem").setLevel(logging.ERROR)       # the linear validity warnings of deep runs
@@ -131,6 +136,14 @@ def main(argv=None):
         out += [f"- {k}: largest |work / energy - 1| {w:.1e} (at {d:.2f} mm), run {t:.1f} s"
                 for k, (w, d, t) in worst.items()] + [""] + lines
         print("\n".join(out[-len(lines) - 4:]), flush=True)
+        if args.energy_3d is not None:
+            print(f"energy balance on {args.energy_3d}, {ENERGY_DEPTHS_3D} mm", flush=True)
+            lines, worst = energy_table(args.energy_3d, ENERGY_DEPTHS_3D, across=True)
+            lines = [line.replace("N/mm", "N") for line in lines]
+            out += ["", f"## Energy balance in 3D: {args.energy_3d.name}, C5 across the finger, {ENERGY_DEPTHS_3D} mm", ""]
+            out += [f"- {k}: largest |work / energy - 1| {w:.1e} (at {d:.2f} mm), run {t:.1f} s"
+                    for k, (w, d, t) in worst.items()] + [""] + lines
+            print("\n".join(out[-len(lines) - 4:]), flush=True)
         print("mesh convergence at 2 mm, finite kinematics", flush=True)
         conv = convergence_table(work, args.sizes)
         out += ["", "## Mesh convergence at 2 mm, finite kinematics", ""] + conv
