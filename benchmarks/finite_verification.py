@@ -70,22 +70,27 @@ def run(folder: Path, depths, kinematics: str, across: bool = False) -> tuple[di
     return steps, seconds
 
 
-def energy_table(folder: Path, depths: str = ENERGY_DEPTHS, across: bool = False) -> tuple[list[str], dict]:
-    rows, worst = {}, {}
+def energy_section(title: str, folder: Path, depths: str, across: bool = False) -> list[str]:
+    """The markdown section of the energy balance of C5 at `depths` on `folder` with both
+    kinematics: each one's largest |work / energy - 1| and run time, then a table of every fourth
+    depth (forces in N/mm in 2D, N across a 3D finger)."""
+    rows, head = {}, [f"## {title}", ""]
     for kinematics in ("linear", "finite"):
         steps, seconds = run(folder, depths, kinematics, across)
-        d, f, e = steps["depth_mm"], steps["force_N"], steps["energy_Nmm"]
-        ratio = indentation_work_Nmm(d, f) / e - 1.0
-        rows[kinematics] = (d, f, e, ratio)
-        worst[kinematics] = (float(np.abs(ratio).max()), float(d[np.argmax(np.abs(ratio))]), seconds)
-    d = rows["linear"][0]
-    lines = ["| depth mm | linear force N/mm | linear work / energy - 1 | finite force N/mm | finite work / energy - 1 |",
-             "|---|---|---|---|---|"]
-    for k in range(len(d)):
-        if k < 4 or (k + 1) % 4 == 0:
-            lines.append(f"| {d[k]:.2f} | {rows['linear'][1][k]:.5g} | {rows['linear'][3][k]:+.1e} "
-                         f"| {rows['finite'][1][k]:.5g} | {rows['finite'][3][k]:+.1e} |")
-    return lines, worst
+        d, f = steps["depth_mm"], steps["force_N"]
+        ratio = indentation_work_Nmm(d, f) / steps["energy_Nmm"] - 1.0
+        rows[kinematics] = (f, ratio)
+        k = int(np.argmax(np.abs(ratio)))
+        head.append(f"- {kinematics}: largest |work / energy - 1| {abs(ratio[k]):.1e} (at {d[k]:.2f} mm), "
+                    f"run {seconds:.1f} s")
+    unit = "N" if across else "N/mm"
+    lines = head + ["", f"| depth mm | linear force {unit} | linear work / energy - 1 | finite force {unit} "
+                        "| finite work / energy - 1 |", "|---|---|---|---|---|"]
+    (fl, rl), (ff, rf) = rows["linear"], rows["finite"]
+    lines += [f"| {d[k]:.2f} | {fl[k]:.5g} | {rl[k]:+.1e} | {ff[k]:.5g} | {rf[k]:+.1e} |"
+              for k in range(len(d)) if k < 4 or (k + 1) % 4 == 0]
+    print("\n".join(lines), flush=True)
+    return lines
 
 
 def convergence_table(work: Path, sizes) -> list[str]:
@@ -129,21 +134,11 @@ def main(argv=None):
            "Written by `benchmarks/finite_verification.py`.", ""]
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
-        print(f"energy balance, {ENERGY_DEPTHS} mm, size {args.energy_size:g} mm", flush=True)
-        lines, worst = energy_table(cylinder(work, args.energy_size))
-        out += [f"## Energy balance: work of the indentor against the stored energy, {ENERGY_DEPTHS} mm "
-                f"({args.energy_size:g} mm elements)", ""]
-        out += [f"- {k}: largest |work / energy - 1| {w:.1e} (at {d:.2f} mm), run {t:.1f} s"
-                for k, (w, d, t) in worst.items()] + [""] + lines
-        print("\n".join(out[-len(lines) - 4:]), flush=True)
+        out += energy_section(f"Energy balance: work of the indentor against the stored energy, {ENERGY_DEPTHS} mm "
+                              f"({args.energy_size:g} mm elements)", cylinder(work, args.energy_size), ENERGY_DEPTHS)
         if args.energy_3d is not None:
-            print(f"energy balance on {args.energy_3d}, {ENERGY_DEPTHS_3D} mm", flush=True)
-            lines, worst = energy_table(args.energy_3d, ENERGY_DEPTHS_3D, across=True)
-            lines = [line.replace("N/mm", "N") for line in lines]
-            out += ["", f"## Energy balance in 3D: {args.energy_3d.name}, C5 across the finger, {ENERGY_DEPTHS_3D} mm", ""]
-            out += [f"- {k}: largest |work / energy - 1| {w:.1e} (at {d:.2f} mm), run {t:.1f} s"
-                    for k, (w, d, t) in worst.items()] + [""] + lines
-            print("\n".join(out[-len(lines) - 4:]), flush=True)
+            out += [""] + energy_section(f"Energy balance in 3D: {args.energy_3d.name}, C5 across the finger, "
+                                         f"{ENERGY_DEPTHS_3D} mm", args.energy_3d, ENERGY_DEPTHS_3D, across=True)
         print("mesh convergence at 2 mm, finite kinematics", flush=True)
         conv = convergence_table(work, args.sizes)
         out += ["", "## Mesh convergence at 2 mm, finite kinematics", ""] + conv
