@@ -228,6 +228,54 @@ def test_drop_round_off_leaves_a_pattern_free_of_summation_order():
     np.testing.assert_allclose(a.diagonal(), A.diagonal(), rtol=0)
 
 
+def test_onto_pattern_keeps_the_earlier_pattern_and_grows_it_by_real_entries():
+    """A matrix that lacks some of an earlier pattern's entries and has round-off ones outside it
+    lands on that pattern (explicit zeros, the round-off dropped); an entry above round-off
+    outside it joins it. The values are the matrix's own."""
+    from fem.core.linalg import drop_round_off, onto_pattern
+
+    rng = np.random.default_rng(8)
+    n = 50
+    A = sp.random(n, n, density=0.1, random_state=rng) + sp.diags(rng.uniform(1, 10, n))
+    A = sp.triu(A + A.T, format="csr")
+    A.data[np.abs(A.data) < 1e-3] = 1e-3
+    B = A.tolil()
+    r, c = sp.triu(A, 1).nonzero()
+    B[r[0], c[0]] = 0.0                                      # an entry of the pattern gone
+    free = [(i, j) for i in range(n) for j in range(i + 1, n) if A[i, j] == 0]
+    B[free[0]] = 1e-16                                       # round-off outside it
+    B[free[1]] = 0.5                                         # a real new entry
+    B = B.tocsr()
+    out = onto_pattern(B, A.indptr, A.indices)
+    np.testing.assert_array_equal(out.toarray(), drop_round_off(B).toarray())
+    pattern = set(zip(*A.nonzero())) | {free[1]}
+    assert set(zip(*np.repeat(np.arange(n), np.diff(out.indptr)).reshape(1, -1), out.indices)) == pattern
+    same = onto_pattern(A, A.indptr, A.indices)
+    np.testing.assert_array_equal(same.indices, A.indices)
+    np.testing.assert_array_equal(same.data, A.data)
+
+
+def test_saddle_factor_reuses_the_analysis_when_entries_cancel():
+    """A tangent that lacks one of the first's entries (a sum that cancelled) and has a round-off
+    one outside its pattern is factorised on the first's analysis (its handle taken over) and
+    solves exactly."""
+    pytest.importorskip("pypardiso")
+    K, B, D, _ = _saddle(seed=9)
+    first = SaddleFactor(K, B, D)
+    upper = sp.triu(K, 1).tocoo()
+    i, j = upper.row[np.argmin(np.abs(upper.data))], upper.col[np.argmin(np.abs(upper.data))]
+    rows, cols = np.nonzero(K.toarray() == 0)
+    K2 = K.tolil()
+    K2[i, j] = K2[j, i] = 0.0
+    K2[rows[0], cols[0]] = K2[cols[0], rows[0]] = 1e-17
+    K2 = K2.tocsr()
+    second = SaddleFactor(K2, B, D, reuse=first)
+    assert not first._pardiso._live
+    b = np.random.default_rng(10).standard_normal(K.shape[0])
+    Kc = (K2 + B.T @ sp.diags(1 / D) @ B).toarray()
+    np.testing.assert_allclose(second(b), np.linalg.solve(Kc, b), rtol=1e-10)
+
+
 def test_interruptible_call_hands_ctrl_c_to_the_caller_at_once():
     """A long call that releases Python's lock runs in its own thread: Ctrl-C (here simulated with
     _thread.interrupt_main) reaches the waiting caller within a few WAIT_S, not when the call
