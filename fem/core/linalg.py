@@ -89,8 +89,9 @@ to the calling thread, the same for all phases of one factorisation). Measured o
 runs: the 2D finite Newton on 12,648 unknowns (cylinder with bone, 0.125 mm, C5 to 2 mm, 115
 factorisations) 10.1-10.8 s on one thread against 14.2-15.3 s on two, where MKL's OpenMP threads
 spin after each short call and take the core the Python side needs; on 44,918 unknowns (0.0625 mm)
-39.7 s against 36.9 s; a 3D linear run on 70,629 unknowns 7.2-7.6 s against 5.2-5.9 s. The
-numbers are the same to the last digit either way."""
+39.7 s against 36.9 s; a 3D linear run on 70,629 unknowns 7.2-7.6 s against 5.2-5.9 s (forces
+equal in the 8-10 digits printed). The count depends on the matrix alone, so a run gives the same
+bytes on every scheduler."""
 
 
 # --------------------------------------------------------------------------- interruptible calls
