@@ -22,8 +22,7 @@ edge around a flat one's edge, the profile's curvature at the closest point for 
 its straight direction in 3D: a cylinder's axis, the edge's line, the step's length axis; the
 pressure block as in NeoHookean), and then moves the active set: nodes whose multiplier turns
 negative leave, nodes that penetrate by more than GAP_TOL_MM join. Once an iteration contracts
-the residual by CHORD, the next keeps its tangent's factorisation (a chord step; in 3D also the
-first iteration of a load step). It stops when the active set
+the residual by CHORD, the next keeps its tangent's factorisation (a chord step). It stops when the active set
 is stable, the free residual is below `tol` of the contact force (1e-8: the solves skip iterative
 refinement, so the last iterations converge linearly, and each further digit of the residual costs
 about one more tangent while the force is settled to 9-10 digits) and every gap is within GAP_TOL_MM,
@@ -65,9 +64,7 @@ Measured (C5, forces unchanged to 9-10 digits): the 1.5 mm monkey, 0.3:0.9:0.3 m
 factorisation every iteration, 131 s with chord steps at 0.3 (21 factorisations in 69 iterations
 instead of 41 in 41); 0.2 mm there 42.6, 32.9, 29.6, 27.6 s at 0 (none), 0.1, 0.2, 0.3; the 2D
 cylinder8 with bone 0.25:2:0.25 mm 9.1, 8.6-9.0, 8.9-9.0, 9.2 s (a 2D factorisation costs about
-one solve, so chord steps gain little there). In 3D each load step starts with a chord step on the
-last step's factorisation: 0.3:0.9:0.3 mm on the 1.5 mm monkey at CHORD 0.2 121 s instead of 139 s
-(20 factorisations instead of 24); in 2D that costs more than it saves (10.8 s against 9.8 s)."""
+one solve, so chord steps gain little there)."""
 PATIENCE = 6
 """Newton iterations in a row without a new smallest residual after which a step is given up (and
 cut): an active set cycling at the edge of the contact, or a diverging iterate, never recovers."""
@@ -325,8 +322,7 @@ class FiniteContact:
         u, lam = u.copy(), lam.copy()
         g = surf.distance(self._positions(u), travel)[0]
         active = (lam > 0) | (g < -self.tol_mm)
-        # in 3D a step starts on the last step's factorisation, which costs there about ten solves
-        last, best, since, chord = math.inf, math.inf, 0, dim == 3 and self._factor is not None
+        last, best, since, chord = math.inf, math.inf, 0, False
         for it in range(MAX_ITER):
             g, n, curv, straight = surf.distance(self._positions(u), travel)
             act = np.flatnonzero(active)
