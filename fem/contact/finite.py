@@ -337,7 +337,8 @@ class FiniteContact:
             fr, Cf = r[self.free], C[:, self.free]
             scale = max(float(np.abs(lam).sum()), 1e-300)
             norm = float(np.linalg.norm(fr))
-            floor = it > 1 and norm > 0.5 * last and norm <= 1e-6 * scale        # round-off reached
+            # round-off reached (a chord step's slow contraction is its old tangent's, not round-off)
+            floor = it > 1 and not chord and norm > 0.5 * last and norm <= 1e-6 * scale
             feasible = (np.all(np.abs(g[act]) <= self.tol_mm) and np.all(lam[act] >= 0)
                         and np.all(g[~active] >= -self.tol_mm))
             if it > 0 and feasible and (norm <= self.tol * scale or floor):
