@@ -124,15 +124,22 @@ def point_operator(m, x, cells, quantity) -> sp.csr_matrix:
                            shape=(n * ncomp, m.ndof))
     if quantity == "strain":
         return strain
-    # stress = 2 mu eps_bar + lambda tr(eps_bar) I, laid out as STRESS_COMPONENTS
-    out, names = STRESS_COMPONENTS[d], STRAIN_COMPONENTS[d]
+    return (hooke_matrix(m.mu[cells], m.lam[cells], d) @ strain).tocsr()
+
+
+def hooke_matrix(mu_MPa, lam_MPa, dim: int) -> sp.csr_matrix:
+    """Sparse (n * len(STRESS_COMPONENTS[dim]), n * len(STRAIN_COMPONENTS[dim])) map from the
+    strain components of `point_operator` at n points, point-major, to their stress components
+    [MPa]: stress = 2 mu eps + lam tr(eps) I, with the Lame moduli mu, lam (n,) of each point's
+    element (the strain's volumetric part is the mixed formulation's, so this is its stress)."""
+    out, names = STRESS_COMPONENTS[dim], STRAIN_COMPONENTS[dim]
     S = np.array([[float(a == b) for b in names] for a in out])
     T = np.outer([a[0] == a[1] for a in out], [b[0] == b[1] for b in names]).astype(float)
-    M = 2 * m.mu[cells, None, None] * S + m.lam[cells, None, None] * T   # (n, nout, ncomp)
+    M = 2 * np.asarray(mu_MPa, float)[:, None, None] * S + np.asarray(lam_MPa, float)[:, None, None] * T
     k, a, c = np.indices(M.shape)
-    hooke = sp.csr_matrix((M.ravel(), ((k * len(out) + a).ravel(), (k * ncomp + c).ravel())),
-                          shape=(n * len(out), n * ncomp))
-    return (hooke @ strain).tocsr()
+    n, ncomp = len(M), len(names)
+    return sp.csr_matrix((M.ravel(), ((k * len(out) + a).ravel(), (k * ncomp + c).ravel())),
+                         shape=(n * len(out), n * ncomp))
 
 
 def centroid_jacobians(m, u) -> np.ndarray:

@@ -10,11 +10,14 @@ along the approach at j:
 - WT (k, m) [mm/N]: the displacement along the approach of every candidate; its `reach` columns
   are the compliance C (k, k) of the condensed ones, from the Schur complement of the
   factorisation (no solves), the other columns from solves;
-- RT (k, r): the receptor sampler's inputs (displacement, strain [-], stress [MPa] at the receptor
-  points, `ReceptorSampler.operator` rows), R = O K^-1 B transposed: the loads of B sit on
-  condensed rows, so each block of 64 candidates is one backward substitution
-  (`fem.core.system.LinearSystem.solve_condensed`); through the transposed system
-  B^T K^-1 O^T (full solves) when O has fewer rows than there are condensed candidates.
+- RT (k, s): the receptor sampler's independent outputs (displacement and strain [-] at the
+  receptor points, the first `ReceptorSampler.independent` rows of its operator O), R = O K^-1 B
+  transposed: the loads of B sit on condensed rows, so each block of 64 candidates is one
+  backward substitution (`fem.core.system.LinearSystem.solve_condensed`); through the transposed
+  system B^T K^-1 O^T (full solves) when O has fewer rows than there are condensed candidates.
+  The stress rows follow from the strain rows point by point (`fem.receptors.grid.complete_outputs`
+  with the Lame moduli lame_MPa (n, 2) of each point's element), so they are computed when read,
+  not stored (3D: 9 of 15 values per receptor point; 2D: 5 of 9).
 
 Rows are contiguous on disk, so a contact problem reads only the rows of the candidates that
 carry force (`StoredCompliance` keeps each row it has read). A contact problem, its deflections
@@ -29,11 +32,12 @@ to round-off. Full displacement fields (a PVD) do need it.
     responses, sampler, used = stored_responses(store, model, approaches, grid, touched)   # all of it
 
 Files (docs/file-formats.md): WT.npy, RT.npy (float64, memory-mapped when read), reach.npy
-(m,) bool, shift_mm.npy and response.json (format, key, approach, shapes, receptor shifts, build
-seconds).
+(m,) bool, shift_mm.npy, lame_MPa.npy and response.json (format, key, dimension, approach, shapes,
+receptor shifts, build seconds).
 """
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import logging
@@ -49,14 +53,15 @@ import scipy.sparse as sp
 from fem.contact.compliance import Compliance, DenseReach, RowCache
 from fem.contact.facets import fe_facets
 from fem.contact.linear import ContactModel
+from fem.core.fields import STRAIN_COMPONENTS, STRESS_COMPONENTS, hooke_matrix
 from fem.io.modelfolder import CONDENSE_MAX_NODES, CONTACT_REGION, HELD, held_regions
-from fem.receptors.grid import ReceptorSampler
+from fem.receptors.grid import ReceptorSampler, complete_outputs
 from fingertip.progress import as_progress
 from fingertip.staging import staged_output, write_json
 
 logger = logging.getLogger(__name__)
 
-RESPONSE_FORMAT = 2
+RESPONSE_FORMAT = 3
 """Version of the stored layout and of what the key covers (raise it when either changes)."""
 BLOCK = 64
 """Right-hand sides per solve when R and W are built."""
@@ -101,15 +106,18 @@ def response_key(model, approach, grid, mesh_sha: str) -> str:
 # --------------------------------------------------------------------------- the model
 @dataclass
 class ResponseModel:
-    """WT (k, m) mm/N and RT (k, r) per N, one row per condensed candidate (module docstring),
-    reach (m,) bool (k True), approach (3,), receptor shifts shift_mm (n,)
-    (`ReceptorSampler.shift_mm`), its key, build seconds and bytes on disk."""
+    """WT (k, m) mm/N and RT (k, s) per N, one row per condensed candidate (module docstring),
+    reach (m,) bool (k True), approach (3,), receptor shifts shift_mm (n,) and Lame moduli
+    lame_MPa (n, 2) (`ReceptorSampler.shift_mm`, `.lame_MPa`), the model's dimension, its key,
+    build seconds and bytes on disk."""
     key: str
+    dim: int
     approach: np.ndarray
     reach: np.ndarray
     WT: np.ndarray
     RT: np.ndarray
     shift_mm: np.ndarray
+    lame_MPa: np.ndarray
     build_seconds: float = float("nan")
     nbytes: int = 0
 
@@ -143,18 +151,21 @@ def build_response(model, approach, sampler, key: str, candidates=None, progress
     k = int(reach.sum())
     B = sp.csc_matrix((np.tile(a[:model.dim], m), (sn.dofs.ravel(), np.repeat(np.arange(m), model.dim))),
                       shape=(model.ndof, m))
-    O = sp.vstack([B[:, ~reach].T, sampler.operator]).tocsr()         # rows still to solve for
+    O = sp.vstack([B[:, ~reach].T, sampler.operator[:sampler.independent]]).tocsr()   # rows still to solve for
     with progress.task(f"response model: {min(k, O.shape[0])} solves for {O.shape[0] - (m - k)} receptor "
                        f"values and {m - k} other candidates"):
         if k <= O.shape[0]:                          # O K^-1 B: k loads on condensed unknowns
             out = _apply_condensed(system, sn.nodes[reach], a, O)
         else:                                        # B^T K^-1 O^T: one solve per row of O
             out = _apply_inverse(system, O.T.tocsc(), B[:, reach].T.tocsr())
-    WT = np.empty((k, m))
-    WT[:, reach] = system.compliance(sn.nodes[reach], a)            # symmetric: rows are columns
-    WT[:, ~reach] = out[:, :m - k]
-    return ResponseModel(key, a, reach, WT, out[:, m - k:], np.asarray(sampler.shift_mm, float),
-                         time.perf_counter() - t0)
+    C = system.compliance(sn.nodes[reach], a)                       # symmetric: rows are columns
+    if k == m:
+        WT = C                                  # every candidate condensed: no copy (0.36 GB at k = 6,740)
+    else:
+        WT = np.empty((k, m))
+        WT[:, reach], WT[:, ~reach] = C, out[:, :m - k]
+    return ResponseModel(key, model.dim, a, reach, WT, out[:, m - k:], np.asarray(sampler.shift_mm, float),
+                         np.asarray(sampler.lame_MPa, float), time.perf_counter() - t0)
 
 
 def _apply_inverse(system, loads, observe) -> np.ndarray:
@@ -185,9 +196,9 @@ def _apply_condensed(system, nodes, a, observe) -> np.ndarray:
 # --------------------------------------------------------------------------- storage
 class ResponseStore:
     """The response models of one model folder: `<model>/response/<key>/` with WT.npy, RT.npy,
-    reach.npy, shift_mm.npy and response.json; written atomically, read memory-mapped."""
+    reach.npy, shift_mm.npy, lame_MPa.npy and response.json; written atomically, read memory-mapped."""
 
-    FILES = ("WT.npy", "RT.npy", "reach.npy", "shift_mm.npy")
+    FILES = ("WT.npy", "RT.npy", "reach.npy", "shift_mm.npy", "lame_MPa.npy")
 
     def __init__(self, model_dir):
         self.folder = Path(model_dir) / "response"
@@ -241,12 +252,14 @@ class ResponseStore:
             return None
         try:
             meta = json.loads((folder / "response.json").read_text())
-            WT, RT, reach, shift = (np.load(folder / f, mmap_mode="r") for f in self.FILES)
+            WT, RT, reach, shift, lame = (np.load(folder / f, mmap_mode="r") for f in self.FILES)
             k, m = meta["shape_WT"]
+            n, dim = meta["receptor_points"], meta["dim"]
             ok = (meta["format"] == RESPONSE_FORMAT and meta["key"] == key and WT.shape == (k, m)
                   and WT.dtype == RT.dtype == np.float64 and list(RT.shape) == meta["shape_RT"] and RT.shape[0] == k
+                  and RT.shape[1] == n * (dim + len(STRAIN_COMPONENTS[dim]))
                   and reach.shape == (m,) and reach.dtype == bool and int(reach.sum()) == k
-                  and shift.shape == (meta["receptor_points"],))
+                  and shift.shape == (n,) and lame.shape == (n, 2))
             if not ok:
                 raise ValueError("shapes or key differ from response.json")
         except (OSError, ValueError, KeyError, TypeError, EOFError) as exc:
@@ -257,18 +270,18 @@ class ResponseStore:
             os.utime(folder / "response.json")          # its last use, for the store's size cap
         except OSError:
             pass                                        # a read-only store keeps no record
-        return ResponseModel(key, np.asarray(meta["approach"], float), np.asarray(reach), WT, RT,
-                             np.asarray(shift), float(meta["build_seconds"]), int(meta["bytes"]))
+        return ResponseModel(key, int(dim), np.asarray(meta["approach"], float), np.asarray(reach), WT, RT,
+                             np.asarray(shift), np.asarray(lame), float(meta["build_seconds"]), int(meta["bytes"]))
 
     def save(self, rm: ResponseModel) -> ResponseModel:
         """Write `rm` atomically (a staged folder renamed into place); returns it with `nbytes` set."""
         target = self.path(rm.key)
         with staged_output(target) as tmp:
-            for name, arr in zip(self.FILES, (rm.WT, rm.RT, rm.reach, rm.shift_mm)):
+            for name, arr in zip(self.FILES, (rm.WT, rm.RT, rm.reach, rm.shift_mm, rm.lame_MPa)):
                 np.save(tmp / name, arr)                # RT may be a view: written without a copy
             rm.nbytes = sum((tmp / f).stat().st_size for f in self.FILES)
             write_json(tmp / "response.json", {
-                "format": RESPONSE_FORMAT, "key": rm.key, "approach": np.asarray(rm.approach).tolist(),
+                "format": RESPONSE_FORMAT, "key": rm.key, "dim": rm.dim, "approach": np.asarray(rm.approach).tolist(),
                 "shape_WT": list(rm.WT.shape), "shape_RT": list(rm.RT.shape),
                 "receptor_points": len(rm.shift_mm), "build_seconds": rm.build_seconds, "bytes": rm.nbytes})
         self._remember()
@@ -302,12 +315,14 @@ class StoredCompliance(DenseReach, Compliance):
     `fem.contact.compliance.CondensedCompliance` (NaN compliance rows outside `reach`, deflections of
     those candidates with the observation), answered by matrix products, no solves. Only the
     rows of candidates a contact problem touches are read from the (memory-mapped) model, each
-    once."""
+    once. Observed responses are completed with their stress rows (`complete_outputs`)."""
 
     def __init__(self, rm: ResponseModel):
         k, m = rm.WT.shape
-        super().__init__(m, rm.RT.shape[1])
+        n = len(rm.lame_MPa)
+        super().__init__(m, rm.RT.shape[1] + n * len(STRESS_COMPONENTS[rm.dim]))
         self._WT, self._RT = rm.WT, rm.RT
+        self._complete = functools.partial(complete_outputs, hooke=hooke_matrix(*np.asarray(rm.lame_MPa).T, rm.dim))
         self._read = RowCache(lambda i: self._WT[i], k, m)          # rows of WT read so far
         self._dense(rm.reach, rm.WT[np.arange(k), np.flatnonzero(rm.reach)])
 
@@ -323,7 +338,7 @@ class StoredCompliance(DenseReach, Compliance):
         return self._read.data[np.ix_(slots, np.asarray(rows, int))].T
 
     def observed(self, idx) -> np.ndarray:
-        return np.asarray(self._RT[self._row[np.asarray(idx, int)]]).T
+        return self._complete(np.asarray(self._RT[self._row[np.asarray(idx, int)]]).T)
 
     def response(self, force_N) -> tuple[np.ndarray, np.ndarray]:
         """((m, k) deflections of every candidate along the approach, (r, k) observed response) to
@@ -331,7 +346,7 @@ class StoredCompliance(DenseReach, Compliance):
         F = np.asarray(force_N, float).reshape(self.m, -1)[self.reach]
         act = np.flatnonzero(np.any(F != 0, axis=1))
         slots = self._read.slots(act)
-        return self._read.data[slots].T @ F[act], np.asarray(self._RT[act]).T @ F[act]
+        return self._read.data[slots].T @ F[act], self._complete(np.asarray(self._RT[act]).T @ F[act])
 
     def observe(self, force_N) -> np.ndarray:
         """(r,) or (r, k) observed response to nodal contact forces (m,) or (m, k)."""
@@ -389,5 +404,6 @@ def stored_responses(store: ResponseStore, model, approaches, grid, touched, pro
             used.append((key, "stored", rm.build_seconds, rm.nbytes))
         out[ak] = rm
     if sampler is None:
-        sampler = ReceptorSampler.without_operator(model.dim, grid, next(iter(out.values())).shift_mm)
+        first = next(iter(out.values()))
+        sampler = ReceptorSampler.without_operator(model.dim, grid, first.shift_mm, first.lame_MPa)
     return out, sampler, used

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from fem.core.fields import hooke_matrix
 from fem.core.measures import State, check_names, evaluate
 from fingertip.errors import InputError
 
@@ -79,33 +80,47 @@ def receptor_grid(surface_x, surface_normal, depths_mm=DEFAULT_DEPTHS_MM, spacin
 
 class ReceptorSampler:
     """Point operators of a `fem.core.model.Model` at the receptor points, stacked in one sparse
-    (r, ndof) matrix `operator` (displacement, strain, stress), and measures from its output."""
+    (r, ndof) matrix `operator` (displacement, strain, stress), and measures from its output.
+    The stress block is the strain block mapped point by point (`fem.core.fields.hooke_matrix`
+    with the Lame moduli `lame_MPa` (n, 2) of each point's element), so the first `independent`
+    rows of an output give the rest (`complete_outputs`)."""
 
     def __init__(self, model, grid: ReceptorGrid):
         pts, self.shift_mm = _off_interfaces(model, grid)
         self.points_mm = pts                    # (n, dim) where the operators sample (off interfaces)
         self.dim, self.n = model.dim, len(pts)
-        blocks = [model.displacement_operator(pts), model.strain_operator(pts), model.stress_operator(pts)]
+        cells = model.locate(pts)
+        self.lame_MPa = np.column_stack([model.mu[cells], model.lam[cells]])
+        strain = model.strain_operator(pts)
+        hooke = hooke_matrix(self.lame_MPa[:, 0], self.lame_MPa[:, 1], self.dim)
+        blocks = [model.displacement_operator(pts), strain, (hooke @ strain).tocsr()]
         self.sizes = [b.shape[0] for b in blocks]
         self.operator = sp.vstack(blocks).tocsr()
         self.grid = grid
 
     @classmethod
-    def without_operator(cls, dim: int, grid: ReceptorGrid, shift_mm) -> "ReceptorSampler":
+    def without_operator(cls, dim: int, grid: ReceptorGrid, shift_mm, lame_MPa) -> "ReceptorSampler":
         """A sampler that only turns operator outputs computed elsewhere (a stored response model,
-        `fem.experiments.response`) into measures: no model, `operator` None; shift_mm (n,) as `shift_mm`."""
+        `fem.experiments.response`) into measures: no model, `operator` None; shift_mm (n,) and
+        lame_MPa (n, 2) as `shift_mm` and `lame_MPa`."""
         self = cls.__new__(cls)
         self.dim, self.n, self.grid = dim, len(grid.points_mm), grid
         self.shift_mm = np.asarray(shift_mm, float)
+        self.lame_MPa = np.asarray(lame_MPa, float)
         self.sizes = [self.n * c for c in ((3, 6, 6) if dim == 3 else (2, 3, 4))]
         self.operator = None
         return self
 
     @property
+    def independent(self) -> int:
+        """The leading rows of `operator` (displacement and strain) that determine the rest
+        (`complete_outputs`)."""
+        return self.sizes[0] + self.sizes[1]
+
+    @property
     def stress_rows(self) -> slice:
         """The rows of `operator` (and of its output) that hold the stress block."""
-        start = self.sizes[0] + self.sizes[1]
-        return slice(start, start + self.sizes[2])
+        return slice(self.independent, self.independent + self.sizes[2])
 
     def with_energy(self) -> "ReceptorSampler":
         """This sampler reading a fourth block of values, the stored energy per reference volume
@@ -132,6 +147,16 @@ class ReceptorSampler:
     def measures(self, values, names=DEFAULT_MEASURES) -> dict[str, np.ndarray]:
         """{name: (n,) values at the receptor points}."""
         return evaluate(check_names(names), self.state(values))
+
+
+def complete_outputs(values, hooke) -> np.ndarray:
+    """(r, ...) receptor operator outputs (displacement, strain, stress blocks) from their first
+    two blocks (independent, ...): the stress block appended, computed from the strain block (the
+    last hooke.shape[1] rows) with the points' `fem.core.fields.hooke_matrix` hooke."""
+    values = np.asarray(values, float)
+    strain = values[len(values) - hooke.shape[1]:]
+    stress = hooke @ strain.reshape(len(strain), -1)
+    return np.concatenate([values, stress.reshape((-1,) + values.shape[1:])])
 
 
 def _off_interfaces(model, grid: ReceptorGrid, snap_mm: float = INTERFACE_SNAP_MM):

@@ -67,6 +67,12 @@ def test_stored_equals_factorised(which, indentor, depth, orientation, request):
     _assert_same(ref, repeat)
     for (_, a), (_, b) in zip(first.experiments[0].steps, repeat.experiments[0].steps):
         assert np.array_equal(a.force_N, b.force_N) and np.array_equal(a.observed, b.observed)
+    # the store holds displacement and strain only; the stress rows the runs compared were
+    # completed from them (3D 9 of 15 values per receptor point, 2D 5 of 9)
+    rm = ResponseStore(folder).load(first.responses[0][0])
+    n, dim = len(rm.lame_MPa), ref.sampler.dim
+    assert rm.RT.shape[1] == ref.sampler.independent == n * (9 if dim == 3 else 5)
+    assert len(ref.experiments[0].steps[-1][1].observed) == n * (15 if dim == 3 else 9)
 
 
 def test_key_follows_inputs(cyl8):
