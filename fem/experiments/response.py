@@ -404,6 +404,5 @@ def stored_responses(store: ResponseStore, model, approaches, grid, touched, pro
             used.append((key, "stored", rm.build_seconds, rm.nbytes))
         out[ak] = rm
     if sampler is None:
-        first = next(iter(out.values()))
-        sampler = ReceptorSampler.without_operator(model.dim, grid, first.shift_mm, first.lame_MPa)
+        sampler = ReceptorSampler.without_operator(model.dim, grid, next(iter(out.values())).shift_mm)
     return out, sampler, used

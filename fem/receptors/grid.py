@@ -99,14 +99,14 @@ class ReceptorSampler:
         self.grid = grid
 
     @classmethod
-    def without_operator(cls, dim: int, grid: ReceptorGrid, shift_mm, lame_MPa) -> "ReceptorSampler":
+    def without_operator(cls, dim: int, grid: ReceptorGrid, shift_mm) -> "ReceptorSampler":
         """A sampler that only turns operator outputs computed elsewhere (a stored response model,
-        `fem.experiments.response`) into measures: no model, `operator` None; shift_mm (n,) and
-        lame_MPa (n, 2) as `shift_mm` and `lame_MPa`."""
+        `fem.experiments.response`) into measures: no model, `operator` and `lame_MPa` None;
+        shift_mm (n,) as `shift_mm`."""
         self = cls.__new__(cls)
         self.dim, self.n, self.grid = dim, len(grid.points_mm), grid
         self.shift_mm = np.asarray(shift_mm, float)
-        self.lame_MPa = np.asarray(lame_MPa, float)
+        self.lame_MPa = None
         self.sizes = [self.n * c for c in ((3, 6, 6) if dim == 3 else (2, 3, 4))]
         self.operator = None
         return self
