@@ -7,8 +7,10 @@
 
 Models: the monkey section at z = 5 mm (2D, `--section-z 5`) under C5 at 0.5 mm; the 3D monkey
 and human presets under C5 perpendicular to the finger at 1 mm, at the middle of the pad. Measures:
-force, contact area (2D: width), peak pressure, and at the receptor depth 0.75 mm the peak strain
-energy density and the peak maximum compressive strain over the sites of a 1 mm grid. Per size:
+force, contact area (2D: width), peak pressure (the nodal peak, and in 2D also the peak of the
+pressure averaged over AVERAGE_MM, `fem.contact.facets.averaged_peak_pressure`, meaningful where
+the size is at most half of it), and at the receptor depth 0.75 mm the peak strain energy density
+and the peak maximum compressive strain over the sites of a 1 mm grid. Per size:
 meshing time (`build_folder`, the mesh cache bypassed), run time (`run_scene`: reading,
 factorising, indenting), the peak resident memory of the process that ran it (each size runs in a
 fresh process), DOFs, the achieved fine-zone edge, the change of each measure from the previous
@@ -19,7 +21,8 @@ ratio 0.45, 0.48, 0.49, 0.499 and the bone modulus 10, 100 (the default) and 100
 to the default material (m43338, nu 0.49 unless the model says otherwise).
 
 Sizes run one after another, coarse to fine; run nothing else heavy meanwhile. Prints the tables
-and writes benchmarks/results/mesh_convergence.md.
+and writes benchmarks/results/mesh_convergence.md, replacing the sections of the models run and
+keeping the others.
 """
 from __future__ import annotations
 
@@ -41,7 +44,10 @@ sys.path.insert(0, str(HERE.parent))
 MODELS = {"2d": "2D monkey section at z = 5 mm, C5 at 0.5 mm",
           "monkey": "3D monkey preset, C5 perpendicular at 1 mm",
           "human": "3D human preset, C5 perpendicular at 1 mm"}
-MEASURES = {"2d": ("force N/mm", "contact width mm", "peak pressure MPa", "SED kPa", "compressive strain"),
+AVERAGE_MM = 0.1
+"""Length over which the 2D peak pressure is also averaged (`averaged_peak_pressure`)."""
+MEASURES = {"2d": ("force N/mm", "contact width mm", "peak pressure MPa", f"peak pressure over {AVERAGE_MM:g} mm MPa",
+                   "SED kPa", "compressive strain"),
             "3d": ("force N", "contact area mm2", "peak pressure MPa", "SED kPa", "compressive strain")}
 RECEPTOR_DEPTH_MM = 0.75
 NU = (0.45, 0.48, 0.49, 0.499)
@@ -71,8 +77,10 @@ def one(model: str, size_mm: float, work: Path, variants: list) -> list[dict]:
     Runs in a child process (`--one`), so its peak memory is its own."""
     import logging
 
+    from fem.contact.facets import averaged_peak_pressure
     from fem.experiments.runner import run_scene
     from fem.geometry.build import MeshSpec, build_folder
+    from fem.io.modelfolder import CONTACT_REGION
 
     logging.getLogger("fem").setLevel(logging.ERROR)         # the validity warning of every 1 mm run
     folder = work / f"{model}_{size_mm:g}"
@@ -92,11 +100,15 @@ def one(model: str, size_mm: float, work: Path, variants: list) -> list[dict]:
         res = sr.experiments[0].steps[-1][1]
         m = sr.sampler.measures(res.observed, ["sed_MPa", "max_compressive_strain"])
         names = MEASURES[kind(model)]
-        rows.append({"variant": label, "size mm": size_mm, "mesh s": mesh_s, "run s": run_s,
-                     "peak MB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
-                     "DOFs": sr.model.ndof, "fine median edge mm": fine_edge_mm,
-                     names[0]: res.total_force_N, names[1]: res.contact_area_mm2, names[2]: res.max_pressure_MPa,
-                     names[3]: 1e3 * float(m["sed_MPa"].max()), names[4]: float(m["max_compressive_strain"].max())})
+        row = {"variant": label, "size mm": size_mm, "mesh s": mesh_s, "run s": run_s,
+               "peak MB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+               "DOFs": sr.model.ndof, "fine median edge mm": fine_edge_mm,
+               names[0]: res.total_force_N, names[1]: res.contact_area_mm2, names[2]: res.max_pressure_MPa,
+               names[-2]: 1e3 * float(m["sed_MPa"].max()), names[-1]: float(m["max_compressive_strain"].max())}
+        if model == "2d":
+            x = sr.model.surface_nodes(CONTACT_REGION[2]).x
+            row[names[3]] = averaged_peak_pressure(res.force_N, x, AVERAGE_MM)
+        rows.append(row)
     return rows
 
 
@@ -186,23 +198,32 @@ def main(argv=None):
         model, size, work, var = json.loads(args.one)
         print(json.dumps(one(model, size, Path(work), var), default=lambda o: o.item()))
         return
-    lines = [f"# Mesh convergence (load average {os.getloadavg()[0]:.1f} at the start, {os.cpu_count()} cores)", ""]
+    when = f"{time.strftime('%Y-%m-%d')}, load average {os.getloadavg()[0]:.1f} at the start, {os.cpu_count()} cores"
+    sections = {}
     with tempfile.TemporaryDirectory() as tmp:
         for model in args.models:
             rows = []
             for size in sorted(args.sizes_2d if model == "2d" else args.sizes_3d, reverse=True):
                 rows += in_child(model, size, Path(tmp), [("default", None, None)])
                 print(f"{model} " + "  ".join(f"{k}={fmt(v)}" for k, v in rows[-1].items()), flush=True)
-            lines += [f"## {MODELS[model]}", ""] + convergence_table(model, rows) + [""]
+            sections[MODELS[model]] = [when, ""] + convergence_table(model, rows)
         if args.sensitivity:
             for model in MODELS:
                 size = SENSITIVITY_SIZE_MM[model]
                 rows = in_child(model, size, Path(tmp), variants())
-                lines += [f"## Sensitivity: {MODELS[model]}, size {size:g} mm", ""] + sensitivity_table(model, rows) + [""]
-                print("\n".join(lines[-len(rows) - 3:]), flush=True)
+                sections[f"Sensitivity: {MODELS[model]}, size {size:g} mm"] = [when, ""] + sensitivity_table(model, rows)
+    text = merged(args.out.read_text() if args.out.exists() else "", sections)
     args.out.parent.mkdir(exist_ok=True)
-    args.out.write_text("\n".join(lines))
-    print("\n".join(lines))
+    args.out.write_text(text)
+    print(text)
+
+
+def merged(old: str, sections: dict) -> str:
+    """The results file `old` with the sections {title: lines} replaced (or appended), the others kept."""
+    parts = old.split("\n## ")
+    kept = {p.split("\n", 1)[0]: p.split("\n", 1)[1].strip("\n") for p in parts[1:]}
+    kept |= {title: "\n".join(lines) for title, lines in sections.items()}
+    return "\n\n".join(["# Mesh convergence"] + [f"## {t}\n\n{body}" for t, body in kept.items()]) + "\n"
 
 
 if __name__ == "__main__":

@@ -33,6 +33,7 @@ from fem.geometry.sections import (
     check_polygon,
     load_sections,
     preset_sections,
+    smooth_polygon,
     tip_length,
 )
 from fingertip.declare import declared, finite, nonnegative, positive
@@ -43,6 +44,8 @@ REFERENCE_RAYS = 64
 """Rays on which `LayeredModel.rays_for` measures the facets of the outer surface."""
 MAX_RAYS = 4096
 """Most rays per section a resampled model has (`LayeredModel.rays_for`)."""
+RAY_BLOCK_ENTRIES = 2**22
+"""Ray-edge pairs per block of `_ray_exit` (32 MB of float64)."""
 #: Per-preset layer-3 thickness and bone offset (not in the thesis; the monkey section is too thin
 #: for the human values: its dorsal half-height is 2.5 mm, the human's 5.0 mm).
 PRESET_PARAMS = {
@@ -212,15 +215,18 @@ class LayeredModel:
         return _layered(self.z_mm, self.polygons, self.centroids, replace(self.params, n_theta=int(n_theta)),
                         self.derived, self.preset, self.sections_sha256)
 
-    def section_rings(self, z_mm: float, n_theta: int) -> tuple[np.ndarray, np.ndarray]:
+    def section_rings(self, z_mm: float, n_theta: int, smooth_mm: float | None = None) -> tuple[np.ndarray, np.ndarray]:
         """((5, n_theta, 2) rings, (2,) centroid) of the cross-section at z_mm (within the sections):
         the two neighbouring sections on n_theta rays, interpolated linearly, as the prisms between
-        them are."""
+        them are. smooth_mm: the sections as smooth curves sampled that finely
+        (`fem.geometry.sections.smooth_polygon`) instead of their polygons."""
         z = self.z_mm
         k = int(np.clip(np.searchsorted(z, z_mm) - 1, 0, len(z) - 2))
         w = (z_mm - z[k]) / (z[k + 1] - z[k])
         u, skin = _ray_directions(int(n_theta)), _skin_depths(self.params)
-        rings = [_section_rings(self.polygons[j], self.centroids[j], u, skin, self.derived, j, z[j]) for j in (k, k + 1)]
+        outline = (lambda j: self.polygons[j]) if smooth_mm is None else (
+            lambda j: smooth_polygon(self.polygons[j], smooth_mm))
+        rings = [_section_rings(outline(j), self.centroids[j], u, skin, self.derived, j, z[j]) for j in (k, k + 1)]
         return (1 - w) * rings[0] + w * rings[1], (1 - w) * self.centroids[k] + w * self.centroids[k + 1]
 
     # ------------------------------------------------------------------ surfaces
@@ -549,14 +555,18 @@ def _ray_directions(n: int) -> np.ndarray:
 
 def _ray_exit(p: np.ndarray, c: np.ndarray, u: np.ndarray, d: float) -> np.ndarray:
     """Distance from c along unit rays u (N, 2) to the boundary of the convex polygon p (n, 2, CCW)
-    eroded by d mm: the erosion is the intersection of the edge half-planes moved inwards by d."""
+    eroded by d mm: the erosion is the intersection of the edge half-planes moved inwards by d.
+    Rays go in blocks of RAY_BLOCK_ENTRIES / n, so a dense outline needs no (N, n) array."""
     e = np.roll(p, -1, axis=0) - p
     n = np.column_stack([e[:, 1], -e[:, 0]]) / np.linalg.norm(e, axis=1)[:, None]   # outward normals
     h = np.einsum("ij,ij->i", n, p) - d - n @ c                 # n.(c + t u) <= h_e - d
-    nu = u @ n.T                                                # (N, E)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.where(nu > 1e-12, h[None] / nu, np.inf)
-    return t.min(axis=1)
+    t = np.empty(len(u))
+    step = max(1, RAY_BLOCK_ENTRIES // len(p))
+    for s in range(0, len(u), step):
+        nu = u[s:s + step] @ n.T                                # (block, E)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t[s:s + step] = np.where(nu > 1e-12, h[None] / nu, np.inf).min(axis=1)
+    return t
 
 
 def _check_nesting(z, rings, cents) -> list[float]:

@@ -4,6 +4,7 @@ import pytest
 
 import pipeline
 from fem.geometry.layered import ModelParams, build_model, model_from_args, params_for
+from fem.geometry.sections import smooth_polygon
 from fingertip.errors import InputError
 from tests.helpers import write_sections
 
@@ -302,3 +303,22 @@ def test_explicit_layer_flags_override_the_size_defaults(tmp_path):
     preset = model_from_args(None, "human", params_for("human"))        # presets keep their values
     assert (preset.params.layer3_mm, preset.params.bone_offset_mm) == (1.5, 1.0)
     assert preset.derived["size_defaults"]["chosen"] == {}
+
+
+def test_smooth_polygon_follows_the_curve_through_the_vertices():
+    """A 720-vertex ellipse (the presets' sampling) as a smooth curve: every sample within 1e-8 mm
+    of the ellipse (measured 1.5e-10; the polygon's own chords sag up to 4e-5 mm), at most the
+    spacing apart, convex and counter-clockwise, and its turning angle per length is the ellipse's
+    curvature (b / a^2 = 0.203 to a / b^2 = 0.379 1/mm) within 1 %, where the polygon's is all at
+    its vertices."""
+    a, b = 4.0, 3.25
+    t = np.linspace(0.0, 2 * np.pi, 720, endpoint=False)
+    q = smooth_polygon(np.column_stack([a * np.cos(t), b * np.sin(t)]), spacing_mm=0.005)
+    assert np.abs((q[:, 0] / a) ** 2 + (q[:, 1] / b) ** 2 - 1).max() * b / 2 < 1e-8
+    step = np.linalg.norm(np.diff(np.vstack([q, q[:1]]), axis=0), axis=1)
+    assert step.max() <= 0.005 + 1e-12
+    e = np.diff(np.vstack([q, q[:2]]), axis=0)
+    turn = (e[:-1, 0] * e[1:, 1] - e[:-1, 1] * e[1:, 0]) / (np.linalg.norm(e[:-1], axis=1) * np.linalg.norm(e[1:], axis=1))
+    assert turn.min() > 0                                        # convex, CCW
+    curvature = turn / step                                      # 1/mm
+    assert 0.99 * b / a ** 2 < curvature.min() and curvature.max() < 1.01 * a / b ** 2
