@@ -494,7 +494,7 @@ class SaddleFactor:
         upper = (onto_pattern(upper, *earlier.pattern) if earlier is not None and earlier.reusable
                  and earlier.n == upper.shape[0] else drop_round_off(upper))
         try:
-            self._pardiso = Pardiso(upper, condensed, reuse=None if reuse is None else reuse._pardiso)
+            self._pardiso = Pardiso(upper, condensed, reuse=earlier)
         except (PyPardisoError, np.linalg.LinAlgError) as exc:
             raise InputError(f"the stiffness matrix is singular ({exc}); check that every part of the "
                              "mesh is held") from None

@@ -53,7 +53,7 @@ import scipy.sparse as sp
 from fem.contact.compliance import Compliance, DenseReach, RowCache
 from fem.contact.facets import fe_facets
 from fem.contact.linear import ContactModel
-from fem.core.fields import STRAIN_COMPONENTS, STRESS_COMPONENTS, hooke_matrix
+from fem.core.fields import STRAIN_COMPONENTS, hooke_matrix
 from fem.io.modelfolder import CONDENSE_MAX_NODES, CONTACT_REGION, HELD, held_regions
 from fem.receptors.grid import ReceptorSampler, complete_outputs
 from fingertip.progress import as_progress
@@ -319,10 +319,10 @@ class StoredCompliance(DenseReach, Compliance):
 
     def __init__(self, rm: ResponseModel):
         k, m = rm.WT.shape
-        n = len(rm.lame_MPa)
-        super().__init__(m, rm.RT.shape[1] + n * len(STRESS_COMPONENTS[rm.dim]))
+        hooke = hooke_matrix(*np.asarray(rm.lame_MPa).T, rm.dim)       # (stress rows, strain rows)
+        super().__init__(m, rm.RT.shape[1] + hooke.shape[0])
         self._WT, self._RT = rm.WT, rm.RT
-        self._complete = functools.partial(complete_outputs, hooke=hooke_matrix(*np.asarray(rm.lame_MPa).T, rm.dim))
+        self._complete = functools.partial(complete_outputs, hooke=hooke)
         self._read = RowCache(lambda i: self._WT[i], k, m)          # rows of WT read so far
         self._dense(rm.reach, rm.WT[np.arange(k), np.flatnonzero(rm.reach)])
 

@@ -224,9 +224,10 @@ class LayeredModel:
         k = int(np.clip(np.searchsorted(z, z_mm) - 1, 0, len(z) - 2))
         w = (z_mm - z[k]) / (z[k + 1] - z[k])
         u, skin = _ray_directions(int(n_theta)), _skin_depths(self.params)
-        outline = (lambda j: self.polygons[j]) if smooth_mm is None else (
-            lambda j: smooth_polygon(self.polygons[j], smooth_mm))
-        rings = [_section_rings(outline(j), self.centroids[j], u, skin, self.derived, j, z[j]) for j in (k, k + 1)]
+        outlines = [self.polygons[j] if smooth_mm is None else smooth_polygon(self.polygons[j], smooth_mm)
+                    for j in (k, k + 1)]
+        rings = [_section_rings(p, self.centroids[j], u, skin, self.derived, j, z[j])
+                 for p, j in zip(outlines, (k, k + 1))]
         return (1 - w) * rings[0] + w * rings[1], (1 - w) * self.centroids[k] + w * self.centroids[k + 1]
 
     # ------------------------------------------------------------------ surfaces
