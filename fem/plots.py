@@ -9,6 +9,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, MaxNLocator, ScalarFormatter
 
+from fem.contact.facets import PEAK_PRESSURE_RADIUS_MM
 from fem.io.runfolder import pad3
 from fem.receptors.analysis import model_values
 
@@ -62,11 +63,12 @@ KEY_LABELS = {"depth_mm": "depth, mm", "time_s": "time, s", "offset_x_mm": "inde
               "offset_z_mm": "indentor offset along z, mm"}
 
 
-def indent_force_figure(name: str, key: str, x, force_N, max_pressure_MPa, dim: int = 3,
+def indent_force_figure(name: str, key: str, x, force_N, peak_pressure_MPa, max_pressure_MPa, dim: int = 3,
                         depth_mm=None) -> Figure:
     """Total force (N; N/mm in 2D) and peak contact pressure of one experiment against x (k,)
-    (its column `key`: depth or sweep offset, mm). depth_mm (k,): a sweep at constant force, whose
-    depth reached is drawn instead of the force."""
+    (its column `key`: depth or sweep offset, mm): the peak averaged over PEAK_PRESSURE_RADIUS_MM
+    (k,) and the nodal peak (k,). depth_mm (k,): a sweep at constant force, whose depth reached is
+    drawn instead of the force."""
     fig = Figure(figsize=(10, 4))
     ax = fig.subplots(1, 2)
     if depth_mm is not None:
@@ -76,8 +78,10 @@ def indent_force_figure(name: str, key: str, x, force_N, max_pressure_MPa, dim: 
     else:
         ax[0].plot(x, force_N, "o-")
         ax[0].set(xlabel=KEY_LABELS.get(key, key), ylabel=f"force, {force_unit(dim)}", title=f"{name}: force")
-    ax[1].plot(x, max_pressure_MPa, "o-")
-    ax[1].set(xlabel=KEY_LABELS.get(key, key), ylabel="max pressure, MPa", title="max contact pressure")
+    ax[1].plot(x, peak_pressure_MPa, "o-", label=f"averaged over {PEAK_PRESSURE_RADIUS_MM:g} mm")
+    ax[1].plot(x, max_pressure_MPa, ".--", label="at a node")
+    ax[1].set(xlabel=KEY_LABELS.get(key, key), ylabel="peak pressure, MPa", title="peak contact pressure")
+    ax[1].legend(fontsize=8)
     return fig
 
 
@@ -182,7 +186,7 @@ def indent_figures(run, scene_run, tables) -> dict[str, Figure]:
     dim = scene_run.model.dim
     if len(steps) > 1:                    # one indentation: its values are in the profile and summary
         figures[f"{name}_force.png"] = indent_force_figure(name, key, rows[key], rows["force_N"],
-                                                           rows["max_pressure_MPa"], dim,
+                                                           rows["peak_pressure_MPa"], rows["max_pressure_MPa"], dim,
                                                            rows["depth_mm"] if key != "depth_mm" and
                                                            run.experiment.force_N is not None else None)
     # deflection and pressure across the indentor (nodes near its centre line)
@@ -437,7 +441,7 @@ def cohort_figure(curves: dict, title: str = "") -> Figure:
             top.plot(depth, force, "o-", ms=4, label=subject)
             bottom.plot(depth, pressure, "o-", ms=4, label=subject)
         top.set(title=name, ylabel="force, N (N/mm in 2D)")
-        bottom.set(xlabel="depth, mm", ylabel="max pressure, MPa")
+        bottom.set(xlabel="depth, mm", ylabel=f"peak pressure over {PEAK_PRESSURE_RADIUS_MM:g} mm, MPa")
     axes[0, 0].legend(fontsize=7)
     if title:
         fig.suptitle(title)

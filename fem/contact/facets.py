@@ -4,10 +4,12 @@ vertices), and which nodes neighbour each other (the ring a node-counted contact
 
     facets, shares = fe_facets(model, "volar", model.surface_nodes("volar"))
     pressure_MPa = smoothed_pressure(force_N, facets, shares)
-    peak_MPa = averaged_peak_pressure(force_N, points_mm, length_mm=0.1)   # over a stated length
+    peak_MPa = averaged_peak_pressure(force_N, points_mm, PEAK_PRESSURE_RADIUS_MM)   # mesh-converged
     pairs = node_pairs(facets, points_mm)
 """
 from __future__ import annotations
+
+import hashlib
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -107,23 +109,61 @@ def edge_area_mm2(active, area_mm2, pairs) -> float:
     return float(np.asarray(area_mm2)[edge & active].sum())
 
 
-def averaged_peak_pressure(force_N, points_mm, length_mm: float) -> float:
-    """Largest contact pressure [MPa] averaged over a stated length: the nodal forces (m,) [N; N/mm
-    in 2D] at points_mm (m, dim) weighted by the bump w(r) = cos^2(pi r / (2 length_mm)) for
-    r < length_mm around each node that carries force, divided by the bump's integral (2D: length_mm;
-    3D: length_mm^2 (pi / 2 - 2 / pi)), the maximum over those nodes. Exact for a uniform pressure
-    up to the nodal quadrature of the bump, O((h / length_mm)^2) for elements of size h; unlike the
-    nodal peak of `smoothed_pressure`, it converges under mesh refinement once h is well below
-    length_mm (the split of P2 node-to-surface forces between vertex and midside nodes carries a
-    first-order error that a node's own pressure keeps; docs/benchmarks.md). 0 without force."""
-    f = np.asarray(force_N, float)
-    x = np.asarray(points_mm, float)
-    centres = np.flatnonzero(f > 0)
-    if not centres.size:
-        return 0.0
-    dim = x.shape[1]
-    pairs = cKDTree(x[centres]).sparse_distance_matrix(cKDTree(x), length_mm, output_type="coo_matrix")
-    w = np.cos(0.5 * np.pi * pairs.data / length_mm) ** 2
-    loads = np.bincount(pairs.row, w * f[pairs.col], minlength=centres.size)
-    area = length_mm if dim == 2 else length_mm ** 2 * (0.5 * np.pi - 2.0 / np.pi)
-    return float(loads.max() / area)
+PEAK_PRESSURE_RADIUS_MM = 1.0
+"""Radius of the bump over which the step tables' `peak_pressure_MPa` averages the contact pressure
+(`averaged_peak_pressure`; its half-maximum width is this radius, the spacing of the receptor
+grid). Measured (docs/benchmarks.md, "Fingertip convergence"): over this radius the peak's changes
+shrink with every refinement from the default sizes on, in 2D and 3D, while the nodal peak
+(`max_pressure_MPa`) keeps moving by up to 0.5 % (2D) and 2-3 % (3D); a smaller radius is
+meaningful only where elements are at most half of it (0.1 mm: 2D sizes of 0.0625 mm and finer)."""
+
+
+class AveragedPeakPressure:
+    """The largest contact pressure [MPa] averaged over a stated radius, for nodal forces on fixed
+    points_mm (m, dim) [mm]: the forces (m,) [N; N/mm in 2D] weighted by the bump
+    w(r) = cos^2(pi r / (2 radius_mm)) for r < radius_mm around each node that carries force,
+    divided by the bump's integral (2D: radius_mm; 3D: radius_mm^2 (pi / 2 - 2 / pi)), the maximum
+    over those nodes. Exact for a uniform pressure up to the nodal quadrature of the bump,
+    O((h / radius_mm)^2) for elements of size h; unlike the nodal peak of `smoothed_pressure`, it
+    converges under mesh refinement once h is well below radius_mm (the split of P2
+    node-to-surface forces between vertex and midside nodes carries a first-order error that a
+    node's own pressure keeps; docs/benchmarks.md). The weights are built once (a sparse (m, m)
+    matrix), so each call is one sparse product: a run's steps share them.
+
+        peak = AveragedPeakPressure(points_mm, PEAK_PRESSURE_RADIUS_MM)
+        peak(force_N)                       # MPa; 0 without force
+    """
+
+    def __init__(self, points_mm, radius_mm: float):
+        x = np.asarray(points_mm, float)
+        tree = cKDTree(x)
+        w = tree.sparse_distance_matrix(tree, radius_mm, output_type="coo_matrix").tocsr()
+        w.data = np.cos(0.5 * np.pi * w.data / radius_mm) ** 2
+        w.setdiag(1.0)                       # each node's own force, at distance 0
+        self.weights = w
+        self.area = radius_mm if x.shape[1] == 2 else radius_mm ** 2 * (0.5 * np.pi - 2.0 / np.pi)
+
+    def __call__(self, force_N) -> float:
+        f = np.asarray(force_N, float)
+        centres = np.flatnonzero(f > 0)
+        if not centres.size:
+            return 0.0
+        return float((self.weights[centres] @ f).max() / self.area)
+
+
+_AVERAGERS: dict = {}
+"""AveragedPeakPressure per (digest of the points, their shape, radius): the last few surfaces."""
+
+
+def averaged_peak_pressure(force_N, points_mm, radius_mm: float) -> float:
+    """`AveragedPeakPressure(points_mm, radius_mm)(force_N)` [MPa], its weights kept for the next
+    call on the same points (every step of a run, every answer of the explorer: building them costs
+    about 30 ms on 7,000 candidates, a call 0.1 ms)."""
+    x = np.ascontiguousarray(points_mm, float)
+    key = (hashlib.blake2b(x.tobytes(), digest_size=16).digest(), x.shape, float(radius_mm))
+    averager = _AVERAGERS.get(key)
+    if averager is None:
+        if len(_AVERAGERS) >= 4:
+            _AVERAGERS.pop(next(iter(_AVERAGERS)))
+        averager = _AVERAGERS[key] = AveragedPeakPressure(x, radius_mm)
+    return averager(force_N)

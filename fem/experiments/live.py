@@ -5,7 +5,7 @@ a notebook.
     live = LiveModel("out/monkey")          # finds (or builds and stores, once) the response model
     a = live.answer({"indentor": "C5", "orientation": "perpendicular", "position_mm": [0, 3.75],
                      "depth_mm": 1.0})
-    a.force_N, a.contact_area_mm2, a.max_pressure_MPa      # one indentation's numbers
+    a.force_N, a.contact_area_mm2, a.peak_pressure_MPa     # one indentation's numbers
     a.surface["pressure_MPa"], a.receptors["sed_MPa"]      # per contact candidate, per receptor point
     Path("here.toml").write_text(live.scene_toml(a.experiment))   # `pipeline.py indent` reproduces it
     f = live.fire(a.experiment, "SA1")      # 3D: SA1 afferents under a ramp-and-hold to that stimulus
@@ -79,8 +79,13 @@ class Answer:
 
     @property
     def max_pressure_MPa(self) -> float:
-        """Largest contact pressure [MPa]."""
+        """Largest contact pressure at a node [MPa]."""
         return float(self.step["max_pressure_MPa"])
+
+    @property
+    def peak_pressure_MPa(self) -> float:
+        """Largest contact pressure averaged over fem.contact.facets.PEAK_PRESSURE_RADIUS_MM [MPa]."""
+        return float(self.step["peak_pressure_MPa"])
 
 
 @dataclass

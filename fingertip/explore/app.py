@@ -26,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fem.contact.facets import PEAK_PRESSURE_RADIUS_MM
 from fem.experiments.live import AFFERENT_TRACE
 from fem.plots import explorer_profile_figure, plain_numbers, rate_map_figure, receptor_map_figure
 from fem.receptors.transduction import CLASSES
@@ -125,7 +126,7 @@ def number_texts(live, a) -> dict:
     area = f"{a.contact_area_mm2:.4g} mm" if live.dim == 2 else f"{a.contact_area_mm2:.4g} mm²"     # 2D: a width
     return {"force_text": f"{a.force_N:.6g} N{per}", "force_exact": repr(a.force_N),
             "depth_text": f"{a.depth_mm:.4g} mm", "area_text": area,
-            "pressure_text": f"{a.max_pressure_MPa:.4g} MPa", "answer_ms": f"{1e3 * a.seconds:.0f} ms"}
+            "pressure_text": f"{a.peak_pressure_MPa:.4g} MPa; at a node {a.max_pressure_MPa:.4g} MPa", "answer_ms": f"{1e3 * a.seconds:.0f} ms"}
 
 
 def firing_text(f) -> str:
@@ -343,7 +344,7 @@ def views(ex: Explorer) -> None:
             area = "contact width" if ex.live.dim == 2 else "contact area"
             with html.Table(classes="text-body-2 mb-2"):
                 for label, key, ident in (("force", "force_text", "force"), ("depth", "depth_text", "depth"),
-                                          (area, "area_text", "area"), ("peak pressure", "pressure_text", "pressure"),
+                                          (area, "area_text", "area"), (f"peak pressure over {PEAK_PRESSURE_RADIUS_MM:g} mm", "pressure_text", "pressure"),
                                           ("answered in", "answer_ms", "answer-ms")):
                     with html.Tr():
                         html.Td(label, classes="pr-4")

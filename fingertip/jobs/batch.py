@@ -35,7 +35,8 @@ from fingertip.staging import check_output_dir, claimed, staged_output
 from fingertip.tables import write_csv
 from reconstruct.turntable import load_turntable
 
-SUMMARY_COLUMNS = ("subject", "experiment", "step", "depth_mm", "force_N", "max_pressure_MPa", "contact_area_mm2")
+SUMMARY_COLUMNS = ("subject", "experiment", "step", "depth_mm", "force_N", "max_pressure_MPa", "peak_pressure_MPa",
+                   "contact_area_mm2")
 """Leading columns of summary.csv; then peak_<measure> per receptor measure, then error."""
 
 
@@ -190,7 +191,7 @@ def summary_table(results: list[dict]) -> dict[str, list]:
 
 
 def cohort_curves(results: list[dict]) -> dict:
-    """{experiment: {subject: (depth_mm (k,), force (k,), max_pressure_MPa (k,))}} of the
+    """{experiment: {subject: (depth_mm (k,), force (k,), peak_pressure_MPa (k,))}} of the
     subjects that ran, for fem.plots.cohort_figure."""
     curves = {}
     for r in results:
@@ -199,7 +200,7 @@ def cohort_curves(results: list[dict]) -> dict:
             by_exp.setdefault(row["experiment"], []).append(row)
         for exp, rows in by_exp.items():
             curves.setdefault(exp, {})[r["subject"]] = tuple(
-                np.array([row[c] for row in rows]) for c in ("depth_mm", "force_N", "max_pressure_MPa"))
+                np.array([row[c] for row in rows]) for c in ("depth_mm", "force_N", "peak_pressure_MPa"))
     return curves
 
 

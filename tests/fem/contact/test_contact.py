@@ -267,11 +267,11 @@ def _p2_line_loads(h, a, pressure):
     return np.column_stack([x, np.zeros_like(x)]), f
 
 
-def test_averaged_peak_pressure_is_the_pressure_over_its_length():
+def test_averaged_peak_pressure_is_the_pressure_over_its_radius():
     """Uniform pressure on P2 facets: the bump-weighted average returns it (measured 7e-16). A
     Hertz profile p0 sqrt(1 - x^2 / a^2): the exact average over the bump at x = 0 (by
-    quadrature), to 1e-6 at h = length / 10 (measured 1.0e-8) and closer when h halves (6e-10). 3D:
-    a uniform pressure lumped on a square grid of length / 10, to 1e-4 (measured 3.3e-5)."""
+    quadrature), to 1e-6 at h = radius / 10 (measured 1.0e-8) and closer when h halves (6e-10). 3D:
+    a uniform pressure lumped on a square grid of radius / 10, to 1e-4 (measured 3.3e-5)."""
     ell = 0.1
     x, f = _p2_line_loads(0.01, 1.0, lambda s: np.full_like(s, 2.5e-4))
     assert averaged_peak_pressure(f, x, ell) == pytest.approx(2.5e-4, rel=1e-9)

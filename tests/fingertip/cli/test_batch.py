@@ -58,7 +58,7 @@ def test_serial_summary_compares_the_subjects(serial):
     rows = csv_rows(serial / "summary.csv")
     assert [r["subject"] for r in rows] == ["cylinder8"] * 5 + ["cylinder8_bone"] * 5 + ["square"] * 5
     assert all(r["error"] == "" for r in rows)
-    assert {"peak_sed_MPa", "peak_max_compressive_strain", "max_pressure_MPa", "contact_area_mm2"} <= set(rows[0])
+    assert {"peak_sed_MPa", "peak_max_compressive_strain", "max_pressure_MPa", "peak_pressure_MPa", "contact_area_mm2"} <= set(rows[0])
     force = {(r["subject"], r["experiment"], float(r["depth_mm"])): float(r["force_N"]) for r in rows}
     for subject in ("cylinder8", "cylinder8_bone", "square"):
         curve = [force[(subject, "C5", d)] for d in (0.25, 0.5, 0.75, 1.0)]

@@ -1,4 +1,6 @@
 """`pipeline.py indent` on a 2D cylinder model with bone: outputs, scenes, bad input, thesis trends."""
+import json
+
 import numpy as np
 import pytest
 
@@ -21,6 +23,10 @@ def test_depth_series_outputs(cyl8, tmp_path):
     assert all(f2 / f1 > d2 / d1 for (d1, f1), (d2, f2) in zip(zip(depth, force), zip(depth[1:], force[1:])))
     assert all(r["kkt_ok"] == "True" for r in rows)
     assert all(float(r["penetration_mm"]) < 1e-8 for r in rows)
+    for r in rows:       # a C5 contact a few mm wide: its mean < the peak over 1 mm < the nodal peak
+        mean = float(r["force_N"]) / float(r["contact_width_mm"])
+        assert mean < float(r["peak_pressure_MPa"]) < float(r["max_pressure_MPa"]), r
+    assert json.loads((out / "run.json").read_text())["peak_pressure_radius_mm"] == 1.0
     for name in ("C5_surface.csv", "C5_receptors.csv", "C5.pvd", "C5_003.vtu", "C5_force.png",
                  "C5_profile.png", "C5_receptors.png"):
         assert (out / name).is_file(), name
