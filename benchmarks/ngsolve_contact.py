@@ -64,6 +64,58 @@ def _block_mesh(maxh_top_mm: float):
     return ng.Mesh(OCCGeometry(face, dim=2).GenerateMesh(maxh=2.0, grading=0.2))
 
 
+def solve_newton(a, gf, fes, where: str, inverse: str = "umfpack") -> int:
+    """Newton's method on NGSolve's energy `a` (a BilinearForm of Variations) from gf, with a
+    backtracking line search on the energy, to NEWTON_TOL_N, or to the round-off floor (a step
+    that no longer halves a residual already below ROUND_OFF_N) -> iterations. RuntimeError naming
+    `where` after 100 iterations."""
+    import ngsolve as ng
+
+    free = np.array(list(fes.FreeDofs()), bool)
+    res, du, trial = gf.vec.CreateVector(), gf.vec.CreateVector(), gf.vec.CreateVector()
+
+    def energy(vec) -> float:
+        e = a.Energy(vec)
+        return e if np.isfinite(e) else np.inf
+
+    last, norms = np.inf, []
+    for it in range(100):
+        a.AssembleLinearization(gf.vec)
+        a.Apply(gf.vec, res)
+        norm = np.linalg.norm(res.FV().NumPy()[free])
+        norms.append(norm)
+        if norm < NEWTON_TOL_N or (norm < ROUND_OFF_N and norm > 0.5 * last):
+            return it
+        last = norm
+        du.data = a.mat.Inverse(fes.FreeDofs(), inverse=inverse) * res
+        e0, slope, alpha = energy(gf.vec), ng.InnerProduct(res, du), 1.0
+        while alpha > 1e-6:
+            trial.data = gf.vec - alpha * du
+            if energy(trial) <= e0 - 1e-4 * alpha * slope:
+                break
+            alpha /= 2
+        gf.vec.data = trial
+    raise RuntimeError(f"NGSolve Newton did not converge at {where}: residuals {np.array(norms[-6:])}")
+
+
+def force_table(unit: str, depths, reference, penetration, ours: dict) -> list[str]:
+    """Markdown lines: per depth (n,) NGSolve's force (n,) [unit] and largest penetration (n,) [mm],
+    then for each mesh size of `ours` ({size mm: {column: (n,) values}}, the force [unit] first)
+    this project's force, its difference from NGSolve's and any further columns."""
+    head = ["depth mm", f"NGSolve {unit}", "NGSolve penetration mm"]
+    for s, cols in ours.items():
+        names = list(cols)
+        head += [f"this project {s:g} mm {unit}", f"/ NGSolve - 1 ({s:g} mm)"] + [f"{c} ({s:g} mm)" for c in names[1:]]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for i, d in enumerate(depths):
+        cells = [f"{d:.2f}", f"{reference[i]:.6g}", f"{penetration[i]:.1e}"]
+        for cols in ours.values():
+            f, *rest = cols.values()
+            cells += [f"{f[i]:.6g}", f"{100 * (f[i] / reference[i] - 1):+.2f} %"] + [f"{v[i]:.4g}" for v in rest]
+        lines.append("| " + " | ".join(cells) + " |")
+    return lines
+
+
 def ngsolve_forces(mu: float, lam: float, depths, maxh_top_mm: float = MAXH_TOP_MM, order: int = ORDER):
     """(force (n,) N/mm at depths, largest penetration (n,) mm, seconds, DOFs) from NGSolve: the
     displacement-only energy (the pressure eliminated, p = kappa (J - 1)) of order `order`, the
@@ -87,35 +139,6 @@ def ngsolve_forces(mu: float, lam: float, depths, maxh_top_mm: float = MAXH_TOP_
     a += ng.Variation((mu / 2 * (ng.InnerProduct(F, F) / J - 2) + (lam + mu) / 2 * (J - 1) ** 2) * ng.dx)
     kpen = ng.Parameter(PENALTY_MPA_PER_MM)
     a += ng.Variation(0.5 * kpen * ng.IfPos(-gap, gap * gap, 0.0) * ng.ds("top"))
-    free = np.array(list(fes.FreeDofs()), bool)
-    res, du, trial = gf.vec.CreateVector(), gf.vec.CreateVector(), gf.vec.CreateVector()
-
-    def energy(vec) -> float:
-        e = a.Energy(vec)
-        return e if np.isfinite(e) else np.inf
-
-    def newton():
-        """Newton with an energy line search to NEWTON_TOL_N, or to the round-off floor (a step that
-        no longer halves a residual already below ROUND_OFF_N)."""
-        last, norms = np.inf, []
-        for _ in range(100):
-            a.AssembleLinearization(gf.vec)
-            a.Apply(gf.vec, res)
-            norm = np.linalg.norm(res.FV().NumPy()[free])
-            norms.append(norm)
-            if norm < NEWTON_TOL_N or (norm < ROUND_OFF_N and norm > 0.5 * last):
-                return
-            last = norm
-            du.data = a.mat.Inverse(fes.FreeDofs(), inverse="umfpack") * res
-            e0, slope, alpha = energy(gf.vec), ng.InnerProduct(res, du), 1.0
-            while alpha > 1e-6:
-                trial.data = gf.vec - alpha * du
-                if energy(trial) <= e0 - 1e-4 * alpha * slope:
-                    break
-                alpha /= 2
-            gf.vec.data = trial
-        raise RuntimeError(f"NGSolve Newton did not converge at depth {RADIUS_MM - centre.Get():.3g} mm, penalty "
-                           f"{kpen.Get():g}: residuals {np.array(norms[-6:])}")
 
     xg = ng.CoefficientFunction((ng.x, ng.y)) + gf - ng.CoefficientFunction((0.0, centre))
     dist = ng.sqrt(ng.InnerProduct(xg, xg))
@@ -131,7 +154,7 @@ def ngsolve_forces(mu: float, lam: float, depths, maxh_top_mm: float = MAXH_TOP_
                 kpen.Set(k)
                 for _ in range(50):                     # the normals to a fixed point
                     frozen.vec.data = gf.vec
-                    newton()
+                    solve_newton(a, gf, fes, f"depth {depth:.3g} mm, penalty {k:g}")
                     if np.abs(gf.vec.FV().NumPy() - frozen.vec.FV().NumPy()).max() < 1e-10:
                         break
                 else:
@@ -168,14 +191,7 @@ def main():
     model = ours[0][3]
     mu, lam = float(model.mu[0]), float(model.lam[0])
     ref, pen, ng_s, ng_dofs = ngsolve_forces(mu, lam, DEPTHS_MM)
-    head = ["depth mm", "NGSolve N/mm", "NGSolve penetration mm"] + [
-        c for s in args.sizes for c in (f"this project {s:g} mm N/mm", f"/ NGSolve - 1 ({s:g} mm)")]
-    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-    for i, d in enumerate(DEPTHS_MM):
-        cells = [f"{d:.2f}", f"{ref[i]:.6g}", f"{pen[i]:.1e}"]
-        for f, *_ in ours:
-            cells += [f"{f[i]:.6g}", f"{100 * (f[i] / ref[i] - 1):+.2f} %"]
-        lines.append("| " + " | ".join(cells) + " |")
+    lines = force_table("N/mm", DEPTHS_MM, ref, pen, {s: {"force": f} for s, (f, *_) in zip(args.sizes, ours)})
     lines += ["", f"NGSolve: {ng_dofs:,} DOFs, {ng_s:.1f} s (mesh, {len(DEPTHS_MM)} depths in "
               f"{STEP_MM:g} mm steps); this project: "
               + ", ".join(f"{s:g} mm {n:,} DOFs {t:.1f} s" for s, (_, t, n, _) in zip(args.sizes, ours)) + "."]
