@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from fem.contact.facets import PEAK_PRESSURE_RADIUS_MM, averaged_peak_pressure
 from fem.contact.finite import FiniteContact
 from fem.contact.indentors import Cylinder, Ellipsoid, Flat, Step, approach_direction, make_indentor, shapes_for
 from fem.contact.linear import MAX_DEPTH_MM, ContactModel, reach, tissue_mm
@@ -114,6 +115,12 @@ class SceneRun:
     warnings: list
     responses: list = field(default_factory=list)
     afferents: tuple = (None, {})
+    peak_pressure_radius_mm: float = PEAK_PRESSURE_RADIUS_MM
+
+    def peak_pressure_MPa(self, force_N) -> float:
+        """The largest contact pressure [MPa] averaged over peak_pressure_radius_mm of nodal forces
+        (m,) [N; N/mm in 2D] on the candidates (`fem.contact.facets.averaged_peak_pressure`)."""
+        return averaged_peak_pressure(force_N, self.surface.x, self.peak_pressure_radius_mm)
 
 
 def top_point(points, place) -> int:

@@ -23,7 +23,6 @@ from pathlib import Path
 
 import numpy as np
 
-from fem.contact.facets import PEAK_PRESSURE_RADIUS_MM, averaged_peak_pressure
 from fem.core.measures import base_measure
 from fem.io.nwb import write_nwb
 from fem.io.vtu import fields_mesh, vtu_mesh, write_mesh
@@ -99,7 +98,7 @@ def run_record(model_dir, scene_run) -> dict:
             "nu": nus.pop() if len(nus) == 1 else {str(k): v for k, v in sorted(mat.nu.items())},
             **({"viscoelastic": law.record()} if law is not None else {}),
             "kinematics": KINEMATICS[scene_run.scene.kinematics],
-            "peak_pressure_radius_mm": PEAK_PRESSURE_RADIUS_MM,
+            "peak_pressure_radius_mm": scene_run.peak_pressure_radius_mm,
             "receptors": {"depths_mm": np.unique(grid.depth_mm).tolist(),
                           "spacing_mm": float(scene_run.scene.receptors.spacing_mm),
                           "line": None if line is None else ["xyz"[line[0]], line[1]],
@@ -236,7 +235,7 @@ def run_tables(run, scene_run) -> dict:
              "energy_Nmm": stored_energy_Nmm(r) if run.viscoelastic is None else float("nan"),
              "contact_area_mm2": r.contact_area_mm2, "contact_width_mm": _width_mm(r, ind, x3, dim),
              "max_pressure_MPa": r.max_pressure_MPa,
-             "peak_pressure_MPa": averaged_peak_pressure(r.force_N, sn.x, PEAK_PRESSURE_RADIUS_MM),
+             "peak_pressure_MPa": scene_run.peak_pressure_MPa(r.force_N),
              "penetration_mm": r.kkt["penetration_mm"],
              "tensile_N": r.kkt["tensile_N"], "complementarity_Nmm": r.kkt["complementarity_Nmm"],
              "kkt_ok": r.kkt["ok"]} for i, (off, r) in enumerate(steps)]
