@@ -98,6 +98,21 @@ def solve_newton(a, gf, fes, where: str, inverse: str = "umfpack") -> int:
     raise RuntimeError(f"NGSolve Newton did not converge at {where}: residuals {np.array(norms[-6:])}")
 
 
+def solve_penalised(a, gf, frozen, fes, kpen, where: str, inverse: str = "umfpack") -> None:
+    """The penalty `kpen` (an ng.Parameter) raised through PENALTY_RAMP_MPA_PER_MM, each solve
+    starting near its answer; at each level the gap's normals (those of the state `frozen`) iterated
+    to a fixed point with `solve_newton`. RuntimeError when the normals do not settle."""
+    for k in PENALTY_RAMP_MPA_PER_MM:
+        kpen.Set(k)
+        for _ in range(50):
+            frozen.vec.data = gf.vec
+            solve_newton(a, gf, fes, f"{where}, penalty {k:g}", inverse=inverse)
+            if np.abs(gf.vec.FV().NumPy() - frozen.vec.FV().NumPy()).max() < 1e-10:
+                break
+        else:
+            raise RuntimeError(f"NGSolve: the contact normals did not settle at {where}")
+
+
 def force_table(unit: str, depths, reference, penetration, ours: dict) -> list[str]:
     """Markdown lines: per depth (n,) NGSolve's force (n,) [unit] and largest penetration (n,) [mm],
     then for each mesh size of `ours` ({size mm: {column: (n,) values}}, the force [unit] first)
@@ -150,15 +165,7 @@ def ngsolve_forces(mu: float, lam: float, depths, maxh_top_mm: float = MAXH_TOP_
         while depth < target - 1e-12:
             depth = min(target, depth + STEP_MM)
             centre.Set(RADIUS_MM - depth)
-            for k in PENALTY_RAMP_MPA_PER_MM:          # each solve starts near its answer
-                kpen.Set(k)
-                for _ in range(50):                     # the normals to a fixed point
-                    frozen.vec.data = gf.vec
-                    solve_newton(a, gf, fes, f"depth {depth:.3g} mm, penalty {k:g}")
-                    if np.abs(gf.vec.FV().NumPy() - frozen.vec.FV().NumPy()).max() < 1e-10:
-                        break
-                else:
-                    raise RuntimeError("NGSolve: the contact normals did not settle")
+            solve_penalised(a, gf, frozen, fes, kpen, f"depth {depth:.3g} mm")
         forces.append(ng.Integrate(along, mesh, definedon=mesh.Boundaries("top")))
         g = gap_g(mesh(xs, np.zeros_like(xs), VOL_or_BND=ng.BND))
         pens.append(max(0.0, -float(np.min(g))))

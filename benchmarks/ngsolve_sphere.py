@@ -48,7 +48,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from ngsolve_contact import force_table, solve_newton  # noqa: E402
+from ngsolve_contact import PENALTY_MPA_PER_MM, STEP_MM, force_table, solve_penalised  # noqa: E402
 
 from fem.verify.closed_forms import hertz_sphere  # noqa: E402
 
@@ -61,9 +61,6 @@ NU = 0.48
 FINE_MM = 1.8
 MAXH_FINE_MM = 0.2
 MAXH_MM = 1.5
-PENALTY_MPA_PER_MM = 1e4
-PENALTY_RAMP_MPA_PER_MM = (1e1, 1e2, 1e3, PENALTY_MPA_PER_MM)
-STEP_MM = 0.05
 
 
 def lame(E: float, nu: float) -> tuple[float, float]:
@@ -123,22 +120,15 @@ def ngsolve_results(mu: float, lam: float, depths, maxh_fine_mm: float = MAXH_FI
     down = ng.GridFunction(fes)                           # the unit translation along y in the basis: with
     down.Set(ng.CoefficientFunction((0.0, 1.0, 0.0)))    # hierarchical P2, 1 on vertices, 0 on edges
     rg = X + gf - c
-    pen = ng.IfPos(RADIUS_MM - ng.sqrt(ng.InnerProduct(rg, rg)), RADIUS_MM - ng.sqrt(ng.InnerProduct(rg, rg)), 0.0)
+    inside = RADIUS_MM - ng.sqrt(ng.InnerProduct(rg, rg))
+    pen = ng.IfPos(inside, inside, 0.0)
     xs = np.linspace(0.0, FINE_MM, 61)
     forces, pens, depth = [], [], 0.0
     for target in depths:
         while depth < target - 1e-12:
             depth = min(target, depth + STEP_MM)
             centre.Set(RADIUS_MM - depth)
-            for k in PENALTY_RAMP_MPA_PER_MM:          # each solve starts near its answer
-                kpen.Set(k)
-                for _ in range(50):                     # the normals to a fixed point
-                    frozen.vec.data = gf.vec
-                    solve_newton(a, gf, fes, f"depth {depth:.3g} mm, penalty {k:g}", inverse=inverse)
-                    if np.abs(gf.vec.FV().NumPy() - frozen.vec.FV().NumPy()).max() < 1e-10:
-                        break
-                else:
-                    raise RuntimeError("NGSolve: the contact normals did not settle")
+            solve_penalised(a, gf, frozen, fes, kpen, f"depth {depth:.3g} mm", inverse)
         contact.Apply(gf.vec, grad)                     # at the solve's own quadrature points
         forces.append(4 * float(ng.InnerProduct(grad, down.vec)))
         g = np.array([pen(mesh(float(x), 0.0, float(z), VOL_or_BND=ng.BND)) for x in xs for z in xs]).ravel()
