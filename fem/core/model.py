@@ -321,6 +321,11 @@ class Model:
             self._factors = {key: factor}                       # keep one
         return LinearSystem(self, fixed, values, self._factors[key])
 
+    def release_factors(self) -> None:
+        """Drop the cached factorisation of `system` (its memory, with the systems that hold it
+        gone too); the next `system` factorises again."""
+        self._factors = {}
+
     def solve(self, prescribed=None, tractions=None, pressures=None, forces=None, point_forces=None,
               f=None) -> Solution:
         """Static solution for prescribed displacements [mm] and loads (see `load_vector`; `f` adds

@@ -9,7 +9,7 @@ along the approach at j:
 
 - WT (k, m) [mm/N]: the displacement along the approach of every candidate; its `reach` columns
   are the compliance C (k, k) of the condensed ones, from the Schur complement of the
-  factorisation (no solves), the other columns from solves;
+  factorisation (no solves), the other columns from solves; its diagonal (k,) kept beside it;
 - RT (k, s): the receptor sampler's independent outputs (displacement and strain [-] at the
   receptor points, the first `ReceptorSampler.independent` rows of its operator O), R = O K^-1 B
   transposed: the loads of B sit on condensed rows, so each block of 64 candidates is one
@@ -19,11 +19,16 @@ along the approach at j:
   with the Lame moduli lame_MPa (n, 2) of each point's element), so they are computed when read,
   not stored (3D: 9 of 15 values per receptor point; 2D: 5 of 9).
 
-Rows are contiguous on disk, so a contact problem reads only the rows of the candidates that
-carry force (`StoredCompliance` keeps each row it has read). A contact problem, its deflections
+Both are kept quantised (`fem.io.rows`): each row rounded to a power-of-two step below WT_REL
+(WT) or RT_REL (RT, displacement and strain blocks apart) times its largest magnitude, and
+compressed row by row, so a contact problem reads and decodes only the rows of the candidates that
+carry force (`StoredCompliance` keeps each row it has read). A model is rounded when it is built,
+before its first use: the run that builds it and every run that reads it use the same numbers, and
+these differ from the factorised path's by less than STORED_RTOL of each quantity's largest
+magnitude (docs/indentation.md, "Stored response models"). A contact problem, its deflections
 and its receptor measures need no factorisation: the contact model of `contact_model` gives the
 forces, deflections and observations of the factorised path (`fem.contact.linear.ContactModel.from_fe`)
-to round-off. Full displacement fields (a PVD) do need it.
+within STORED_RTOL. Full displacement fields (a PVD) do need it.
 
     store = ResponseStore("out/cyl8")                      # <model>/response/<key>/
     key = response_key(model, approach, grid, store.mesh_sha256())
@@ -31,9 +36,9 @@ to round-off. Full displacement fields (a PVD) do need it.
     cm = contact_model(model, sn, {approach_key(approach): rm})   # fem.contact.linear.ContactModel
     responses, sampler, used = stored_responses(store, model, approaches, grid, touched)   # all of it
 
-Files (docs/file-formats.md): WT.npy, RT.npy (float64, memory-mapped when read), reach.npy
-(m,) bool, shift_mm.npy, lame_MPa.npy and response.json (format, key, dimension, approach, shapes,
-receptor shifts, build seconds).
+Files (docs/file-formats.md): WT.rows, RT.rows (`fem.io.rows.RowFile`, read by rows),
+diagonal_mm_per_N.npy (k,), reach.npy (m,) bool, shift_mm.npy, lame_MPa.npy and response.json
+(format, key, dimension, approach, shapes, receptor shifts, build seconds).
 """
 from __future__ import annotations
 
@@ -55,19 +60,28 @@ from fem.contact.facets import fe_facets
 from fem.contact.linear import ContactModel
 from fem.core.fields import STRAIN_COMPONENTS, hooke_matrix
 from fem.io.modelfolder import CONDENSE_MAX_NODES, CONTACT_REGION, HELD, held_regions
+from fem.io.rows import RowFile, quantise, write_rows
 from fem.receptors.grid import ReceptorSampler, complete_outputs
 from fingertip.progress import as_progress
 from fingertip.staging import staged_output, write_json
 
 logger = logging.getLogger(__name__)
 
-RESPONSE_FORMAT = 3
+RESPONSE_FORMAT = 4
 """Version of the stored layout and of what the key covers (raise it when either changes)."""
 BLOCK = 64
 """Right-hand sides per solve when R and W are built."""
 STORE_MAX_BYTES = 3 * 2**30
 """A model folder's response store keeps at most this many bytes: saving a model removes the
 models used least recently (by their last load or save) until the rest fit."""
+WT_REL = 1e-9
+"""WT is stored rounded to a step below this fraction of each row's largest magnitude."""
+RT_REL = 5e-8
+"""RT likewise, per row and block (the displacements, the strains)."""
+STORED_RTOL = 1e-6
+"""The error budget of a stored model: forces, deflections and receptor values differ from the
+factorised path's by less than this fraction of each one's largest magnitude in the run (measured
+up to 4.0e-7, the receptor SED of C5 to 3 mm on the human 0.5 mm model)."""
 
 
 # --------------------------------------------------------------------------- key
@@ -107,6 +121,8 @@ def response_key(model, approach, grid, mesh_sha: str) -> str:
 @dataclass
 class ResponseModel:
     """WT (k, m) mm/N and RT (k, s) per N, one row per condensed candidate (module docstring),
+    quantised: arrays when built (with their step exponents `exponents`, {"WT": (k, 1), "RT":
+    (k, 2)}), `fem.io.rows.RowFile`s when read; the compliance's diagonal diagonal_mm_per_N (k,),
     reach (m,) bool (k True), approach (3,), receptor shifts shift_mm (n,) and Lame moduli
     lame_MPa (n, 2) (`ReceptorSampler.shift_mm`, `.lame_MPa`), the model's dimension, its key,
     build seconds and bytes on disk."""
@@ -114,12 +130,19 @@ class ResponseModel:
     dim: int
     approach: np.ndarray
     reach: np.ndarray
-    WT: np.ndarray
-    RT: np.ndarray
+    WT: np.ndarray | RowFile
+    RT: np.ndarray | RowFile
+    diagonal_mm_per_N: np.ndarray
     shift_mm: np.ndarray
     lame_MPa: np.ndarray
     build_seconds: float = float("nan")
     nbytes: int = 0
+    exponents: dict | None = None
+
+    @property
+    def blocks(self) -> dict:
+        """{"WT": column blocks, "RT": column blocks} of the quantisation (`fem.io.rows`)."""
+        return {"WT": [0, self.WT.shape[1]], "RT": [0, self.dim * len(self.shift_mm), self.RT.shape[1]]}
 
     def covers(self, candidates) -> bool:
         """Whether every candidate of the (m,) bool mask is condensed."""
@@ -159,13 +182,19 @@ def build_response(model, approach, sampler, key: str, candidates=None, progress
         else:                                        # B^T K^-1 O^T: one solve per row of O
             out = _apply_inverse(system, O.T.tocsc(), B[:, reach].T.tocsr())
     C = system.compliance(sn.nodes[reach], a)                       # symmetric: rows are columns
-    if k == m:
-        WT = C                                  # every candidate condensed: no copy (0.36 GB at k = 6,740)
-    else:
-        WT = np.empty((k, m))
-        WT[:, reach], WT[:, ~reach] = C, out[:, :m - k]
-    return ResponseModel(key, model.dim, a, reach, WT, out[:, m - k:], np.asarray(sampler.shift_mm, float),
-                         np.asarray(sampler.lame_MPa, float), time.perf_counter() - t0)
+    del system
+    model.release_factors()                 # the factorisation's memory (C stays): the rows are all it was for
+    WT = np.empty((k, m))
+    WT[:, reach], WT[:, ~reach] = C, out[:, :m - k]
+    del C
+    RT = np.ascontiguousarray(out[:, m - k:])
+    del out
+    rm = ResponseModel(key, model.dim, a, reach, WT, RT, np.zeros(k), np.asarray(sampler.shift_mm, float),
+                       np.asarray(sampler.lame_MPa, float))
+    rm.exponents = {"WT": quantise(WT, rm.blocks["WT"], WT_REL), "RT": quantise(RT, rm.blocks["RT"], RT_REL)}
+    rm.diagonal_mm_per_N = WT[np.arange(k), np.flatnonzero(reach)]
+    rm.build_seconds = time.perf_counter() - t0
+    return rm
 
 
 def _apply_inverse(system, loads, observe) -> np.ndarray:
@@ -195,10 +224,12 @@ def _apply_condensed(system, nodes, a, observe) -> np.ndarray:
 
 # --------------------------------------------------------------------------- storage
 class ResponseStore:
-    """The response models of one model folder: `<model>/response/<key>/` with WT.npy, RT.npy,
-    reach.npy, shift_mm.npy, lame_MPa.npy and response.json; written atomically, read memory-mapped."""
+    """The response models of one model folder: `<model>/response/<key>/` with WT.rows, RT.rows,
+    diagonal_mm_per_N.npy, reach.npy, shift_mm.npy, lame_MPa.npy and response.json; written
+    atomically, read by rows."""
 
-    FILES = ("WT.npy", "RT.npy", "reach.npy", "shift_mm.npy", "lame_MPa.npy")
+    ROWS = ("WT", "RT")
+    ARRAYS = ("diagonal_mm_per_N", "reach", "shift_mm", "lame_MPa")
 
     def __init__(self, model_dir):
         self.folder = Path(model_dir) / "response"
@@ -252,12 +283,13 @@ class ResponseStore:
             return None
         try:
             meta = json.loads((folder / "response.json").read_text())
-            WT, RT, reach, shift, lame = (np.load(folder / f, mmap_mode="r") for f in self.FILES)
+            WT, RT = (RowFile(folder / f"{name}.rows") for name in self.ROWS)
+            diagonal, reach, shift, lame = (np.load(folder / f"{name}.npy") for name in self.ARRAYS)
             k, m = meta["shape_WT"]
             n, dim = meta["receptor_points"], meta["dim"]
             ok = (meta["format"] == RESPONSE_FORMAT and meta["key"] == key and WT.shape == (k, m)
-                  and WT.dtype == RT.dtype == np.float64 and list(RT.shape) == meta["shape_RT"] and RT.shape[0] == k
-                  and RT.shape[1] == n * (dim + len(STRAIN_COMPONENTS[dim]))
+                  and list(RT.shape) == meta["shape_RT"] and RT.shape[0] == k
+                  and RT.shape[1] == n * (dim + len(STRAIN_COMPONENTS[dim])) and diagonal.shape == (k,)
                   and reach.shape == (m,) and reach.dtype == bool and int(reach.sum()) == k
                   and shift.shape == (n,) and lame.shape == (n, 2))
             if not ok:
@@ -270,16 +302,19 @@ class ResponseStore:
             os.utime(folder / "response.json")          # its last use, for the store's size cap
         except OSError:
             pass                                        # a read-only store keeps no record
-        return ResponseModel(key, int(dim), np.asarray(meta["approach"], float), np.asarray(reach), WT, RT,
-                             np.asarray(shift), np.asarray(lame), float(meta["build_seconds"]), int(meta["bytes"]))
+        return ResponseModel(key, int(dim), np.asarray(meta["approach"], float), reach, WT, RT, diagonal, shift,
+                             lame, float(meta["build_seconds"]), int(meta["bytes"]))
 
     def save(self, rm: ResponseModel) -> ResponseModel:
-        """Write `rm` atomically (a staged folder renamed into place); returns it with `nbytes` set."""
+        """Write a built `rm` atomically (a staged folder renamed into place); returns it with
+        `nbytes` set."""
         target = self.path(rm.key)
         with staged_output(target) as tmp:
-            for name, arr in zip(self.FILES, (rm.WT, rm.RT, rm.reach, rm.shift_mm, rm.lame_MPa)):
-                np.save(tmp / name, arr)                # RT may be a view: written without a copy
-            rm.nbytes = sum((tmp / f).stat().st_size for f in self.FILES)
+            rm.nbytes = sum(write_rows(tmp / f"{name}.rows", getattr(rm, name), rm.exponents[name], rm.blocks[name])
+                            for name in self.ROWS)
+            for name in self.ARRAYS:
+                np.save(tmp / f"{name}.npy", getattr(rm, name))
+                rm.nbytes += (tmp / f"{name}.npy").stat().st_size
             write_json(tmp / "response.json", {
                 "format": RESPONSE_FORMAT, "key": rm.key, "dim": rm.dim, "approach": np.asarray(rm.approach).tolist(),
                 "shape_WT": list(rm.WT.shape), "shape_RT": list(rm.RT.shape),
@@ -314,17 +349,18 @@ class StoredCompliance(DenseReach, Compliance):
     """The compliance and observed response of a `ResponseModel`: the same interface as
     `fem.contact.compliance.CondensedCompliance` (NaN compliance rows outside `reach`, deflections of
     those candidates with the observation), answered by matrix products, no solves. Only the
-    rows of candidates a contact problem touches are read from the (memory-mapped) model, each
-    once. Observed responses are completed with their stress rows (`complete_outputs`)."""
+    rows of candidates a contact problem touches are read from the model (decoded from its row
+    files when stored), each once. Observed responses are completed with their stress rows
+    (`complete_outputs`)."""
 
     def __init__(self, rm: ResponseModel):
         k, m = rm.WT.shape
         hooke = hooke_matrix(*np.asarray(rm.lame_MPa).T, rm.dim)       # (stress rows, strain rows)
         super().__init__(m, rm.RT.shape[1] + hooke.shape[0])
-        self._WT, self._RT = rm.WT, rm.RT
         self._complete = functools.partial(complete_outputs, hooke=hooke)
-        self._read = RowCache(lambda i: self._WT[i], k, m)          # rows of WT read so far
-        self._dense(rm.reach, rm.WT[np.arange(k), np.flatnonzero(rm.reach)])
+        self._read = RowCache(lambda i: rm.WT[i], k, m)             # rows of WT read so far
+        self._read_RT = RowCache(lambda i: rm.RT[i], k, rm.RT.shape[1])
+        self._dense(rm.reach, rm.diagonal_mm_per_N)
 
     def _rows(self, rows) -> np.ndarray:
         slots = self._read.slots(rows)
@@ -338,15 +374,16 @@ class StoredCompliance(DenseReach, Compliance):
         return self._read.data[np.ix_(slots, np.asarray(rows, int))].T
 
     def observed(self, idx) -> np.ndarray:
-        return self._complete(np.asarray(self._RT[self._row[np.asarray(idx, int)]]).T)
+        slots = self._read_RT.slots(self._row[np.asarray(idx, int)])
+        return self._complete(self._read_RT.data[slots].T)
 
     def response(self, force_N) -> tuple[np.ndarray, np.ndarray]:
         """((m, k) deflections of every candidate along the approach, (r, k) observed response) to
         nodal contact forces (m, k): the rows of the candidates that carry force only."""
         F = np.asarray(force_N, float).reshape(self.m, -1)[self.reach]
         act = np.flatnonzero(np.any(F != 0, axis=1))
-        slots = self._read.slots(act)
-        return self._read.data[slots].T @ F[act], self._complete(np.asarray(self._RT[act]).T @ F[act])
+        slots, slots_RT = self._read.slots(act), self._read_RT.slots(act)
+        return self._read.data[slots].T @ F[act], self._complete(self._read_RT.data[slots_RT].T @ F[act])
 
     def observe(self, force_N) -> np.ndarray:
         """(r,) or (r, k) observed response to nodal contact forces (m,) or (m, k)."""

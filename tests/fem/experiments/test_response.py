@@ -9,15 +9,16 @@ import numpy as np
 import pytest
 
 import pipeline
-from fem.experiments.response import ResponseStore, response_key
+from fem.experiments.response import STORED_RTOL, ResponseStore, response_key
 from fem.experiments.runner import run_experiments
 from fem.experiments.scene import Scene
 from fem.io.modelfolder import read_model
 from tests.helpers import ROOT
 
-RTOL = 1e-9
+RTOL = STORED_RTOL
 """Stored against factorised: both solve the same linear system, once by a Schur complement of a
-subset and solves, once by a stored matrix product; measured agreement is 1e-11 or better."""
+subset and solves, once by a stored matrix product whose rows are rounded to a step of 1e-9 (WT) and
+5e-8 (RT) of their largest value; the budget the docs state for it."""
 
 
 @pytest.fixture(scope="module")
@@ -107,9 +108,9 @@ def test_corrupt_store_is_rebuilt(cyl8, damage, caplog):
     del first                                   # its memory maps: a file truncated in place is not readable
     folder = ResponseStore(cyl8).path(key)
     if damage == "truncate":
-        data = (folder / "RT.npy").read_bytes()
-        (folder / "RT.npy").unlink()
-        (folder / "RT.npy").write_bytes(data[:len(data) // 2])
+        data = (folder / "RT.rows").read_bytes()
+        (folder / "RT.rows").unlink()
+        (folder / "RT.rows").write_bytes(data[:len(data) // 2])
     else:
         (folder / "response.json").write_text("{not json")
     with caplog.at_level(logging.WARNING, "fem.experiments.response"):
@@ -138,7 +139,7 @@ def test_first_indent_stores_the_second_answers_and_a_read_only_folder_factorise
     assert pipeline.main(["indent", str(locked), *argv[2:], "--out", str(tmp_path / "third")]) == 0
     assert "response model" not in capsys.readouterr().out and not (locked / "response").exists()
     forces = [float(next(csv.DictReader(open(tmp_path / run / "C5.csv")))["force_N"]) for run in ("first", "third")]
-    assert forces[0] == pytest.approx(forces[1], rel=1e-9)
+    assert forces[0] == pytest.approx(forces[1], rel=STORED_RTOL)
 
 
 def test_prepare_then_indent(cyl8, tmp_path, capsys):
@@ -155,7 +156,7 @@ def test_prepare_then_indent(cyl8, tmp_path, capsys):
     captured = capsys.readouterr()
     assert f"response model: stored {key}" in captured.out
     assert "factorising" not in captured.err
-    # the factorised path writes the same numbers (to the CSVs' 9 significant digits, round-off aside)
+    # the factorised path writes the same numbers, within the stored model's budget of each column's largest
     ref = tmp_path / "ref"
     assert pipeline.main(["indent", str(cyl8), "--indentor", "C5", "--depth", "0.5,1", "--material", "m43338",
                           "--receptor-spacing", "0.5", "--pvd", "--out", str(ref), "--quiet"]) == 0
@@ -165,15 +166,16 @@ def test_prepare_then_indent(cyl8, tmp_path, capsys):
             ra, rb = list(csv.reader(a)), list(csv.reader(b))
         assert ra[0] == rb[0] and len(ra) == len(rb)
         skip = {ra[0].index(c) for c in ("penetration_mm", "tensile_N", "complementarity_Nmm") if c in ra[0]}
-        for x, y in zip(ra[1:], rb[1:]):
-            for j, (u, v) in enumerate(zip(x, y)):
-                if j not in skip and u != v:
-                    assert float(u) == pytest.approx(float(v), rel=1e-7, abs=1e-15), (name, ra[0][j])
+        for j, column in enumerate(ra[0]):
+            if j in skip or column == "kkt_ok":
+                continue
+            u, v = (np.array([float(r[j]) for r in rows[1:]]) for rows in (ra, rb))
+            assert np.abs(u - v).max() <= STORED_RTOL * np.abs(v).max(), (name, column)
     stored, factorised = (json.loads((f / "run.json").read_text()) for f in (out, ref))
     va, vb = (r["experiments"][0].pop("validity") for r in (stored, factorised))
     assert stored == factorised
     # the linear range: the same receptor strains; only the factorised run has the full field
-    assert va.pop("max_receptor_strain") == pytest.approx(vb.pop("max_receptor_strain"), rel=1e-9)
+    assert va.pop("max_receptor_strain") == pytest.approx(vb.pop("max_receptor_strain"), rel=STORED_RTOL)
     assert (va.pop("inverted_elements"), va.pop("inversion_checked")) == (None, False)
     assert (vb.pop("inverted_elements"), vb.pop("inversion_checked")) == (0.0, True) and va == vb
 
