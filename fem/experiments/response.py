@@ -49,7 +49,7 @@ import logging
 import os
 import shutil
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -125,7 +125,7 @@ class ResponseModel:
     (k, 2)}), `fem.io.rows.RowFile`s when read; the compliance's diagonal diagonal_mm_per_N (k,),
     reach (m,) bool (k True), approach (3,), receptor shifts shift_mm (n,) and Lame moduli
     lame_MPa (n, 2) (`ReceptorSampler.shift_mm`, `.lame_MPa`), the model's dimension, its key,
-    build seconds and bytes on disk."""
+    build seconds and bytes on disk. The rows read so far stay with it (`row_cache`)."""
     key: str
     dim: int
     approach: np.ndarray
@@ -138,6 +138,15 @@ class ResponseModel:
     build_seconds: float = float("nan")
     nbytes: int = 0
     exponents: dict | None = None
+    _row_caches: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def row_cache(self, name: str) -> RowCache:
+        """The rows of "WT" or "RT" read so far (`fem.contact.compliance.RowCache`), kept with the
+        model: every contact problem it answers in this process reads and decodes a row once."""
+        if name not in self._row_caches:
+            rows = getattr(self, name)
+            self._row_caches[name] = RowCache(lambda i: rows[i], *rows.shape)
+        return self._row_caches[name]
 
     @property
     def blocks(self) -> dict:
@@ -226,7 +235,8 @@ def _apply_condensed(system, nodes, a, observe) -> np.ndarray:
 class ResponseStore:
     """The response models of one model folder: `<model>/response/<key>/` with WT.rows, RT.rows,
     diagonal_mm_per_N.npy, reach.npy, shift_mm.npy, lame_MPa.npy and response.json; written
-    atomically, read by rows."""
+    atomically, read by rows. A model loaded or saved through a store object is held by it, with
+    the rows read so far, for its later loads (the explorer's answers)."""
 
     ROWS = ("WT", "RT")
     ARRAYS = ("diagonal_mm_per_N", "reach", "shift_mm", "lame_MPa")
@@ -234,6 +244,7 @@ class ResponseStore:
     def __init__(self, model_dir):
         self.folder = Path(model_dir) / "response"
         self._mesh_sha = self._memo = None
+        self._held: dict[str, ResponseModel] = {}      # loaded or saved through this store, by key
 
     @classmethod
     def existing(cls, model_dir) -> ResponseStore | None:
@@ -280,7 +291,11 @@ class ResponseStore:
         warning, so the caller rebuilds it."""
         folder = self.path(key)
         if not folder.is_dir():
+            self._held.pop(key, None)
             return None
+        if key in self._held:
+            self._touch(folder)
+            return self._held[key]
         try:
             meta = json.loads((folder / "response.json").read_text())
             WT, RT = (RowFile(folder / f"{name}.rows") for name in self.ROWS)
@@ -298,12 +313,17 @@ class ResponseStore:
             logger.warning(f"stored response model {folder} is unreadable ({exc}): removed, it will be rebuilt")
             shutil.rmtree(folder, ignore_errors=True)
             return None
+        self._touch(folder)
+        self._held[key] = ResponseModel(key, int(dim), np.asarray(meta["approach"], float), reach, WT, RT, diagonal,
+                                        shift, lame, float(meta["build_seconds"]), int(meta["bytes"]))
+        return self._held[key]
+
+    @staticmethod
+    def _touch(folder: Path) -> None:
         try:
             os.utime(folder / "response.json")          # its last use, for the store's size cap
         except OSError:
             pass                                        # a read-only store keeps no record
-        return ResponseModel(key, int(dim), np.asarray(meta["approach"], float), reach, WT, RT, diagonal, shift,
-                             lame, float(meta["build_seconds"]), int(meta["bytes"]))
 
     def save(self, rm: ResponseModel) -> ResponseModel:
         """Write a built `rm` atomically (a staged folder renamed into place); returns it with
@@ -320,6 +340,7 @@ class ResponseStore:
                 "shape_WT": list(rm.WT.shape), "shape_RT": list(rm.RT.shape),
                 "receptor_points": len(rm.shift_mm), "build_seconds": rm.build_seconds, "bytes": rm.nbytes})
         self._remember()
+        self._held[rm.key] = rm
         self._evict(keep=rm.key)
         return rm
 
@@ -341,6 +362,7 @@ class ResponseStore:
                 logger.warning(f"response store of {self.folder.parent} over {STORE_MAX_BYTES / 2**30:g} GiB: "
                                f"removing the model used least recently ({key[:12]}, {size / 2**20:.0f} MB)")
                 shutil.rmtree(self.path(key), ignore_errors=True)
+                self._held.pop(key, None)
                 total -= size
 
 
@@ -354,12 +376,11 @@ class StoredCompliance(DenseReach, Compliance):
     (`complete_outputs`)."""
 
     def __init__(self, rm: ResponseModel):
-        k, m = rm.WT.shape
+        m = rm.WT.shape[1]
         hooke = hooke_matrix(*np.asarray(rm.lame_MPa).T, rm.dim)       # (stress rows, strain rows)
         super().__init__(m, rm.RT.shape[1] + hooke.shape[0])
         self._complete = functools.partial(complete_outputs, hooke=hooke)
-        self._read = RowCache(lambda i: rm.WT[i], k, m)             # rows of WT read so far
-        self._read_RT = RowCache(lambda i: rm.RT[i], k, rm.RT.shape[1])
+        self._read, self._read_RT = rm.row_cache("WT"), rm.row_cache("RT")     # rows read so far
         self._dense(rm.reach, rm.diagonal_mm_per_N)
 
     def _rows(self, rows) -> np.ndarray:

@@ -247,3 +247,25 @@ def test_store_keeps_to_its_size_by_dropping_the_least_recently_used(cyl8, monke
         store._evict(keep=keys[2])
     assert sorted(p.name for p in (cyl8 / "response").iterdir() if p.is_dir()) == sorted([keys[0], keys[2]])
     assert "used least recently" in caplog.text and keys[1][:12] in caplog.text
+
+
+def test_a_store_holds_its_models_with_the_rows_read(cyl8, monkeypatch):
+    """The explorer's answers: a store object loads a model once, and a row decoded for one contact
+    problem is not decoded again for the next."""
+    from fem.io.rows import RowFile
+
+    scene = Scene.from_dict({"experiment": [{"name": "C5", "indentor": "C5", "depth_mm": "0.25:1:0.25"}]})
+    model, info = read_model(cyl8)
+    key = run_experiments(model, info, scene, store=ResponseStore(cyl8)).responses[0][0]
+    decoded = []
+    read = RowFile.__getitem__
+    monkeypatch.setattr(RowFile, "__getitem__", lambda self, idx: decoded.append(len(idx)) or read(self, idx))
+    store = ResponseStore(cyl8)
+    first = run_experiments(model, info, scene, store=store)
+    assert first.responses[0][:2] == (key, "stored") and sum(decoded) > 0
+    assert store.load(key) is store.load(key) is not ResponseStore(cyl8).load(key)
+    before = sum(decoded)
+    again = run_experiments(model, info, scene, store=store)
+    assert sum(decoded) == before
+    for (_, a), (_, b) in zip(first.experiments[0].steps, again.experiments[0].steps, strict=True):
+        assert np.array_equal(a.force_N, b.force_N) and np.array_equal(a.observed, b.observed)
