@@ -286,9 +286,9 @@ class ResponseStore:
         return self.folder / key
 
     def load(self, key: str) -> ResponseModel | None:
-        """The stored model of `key`, memory-mapped; None when there is none. A folder that does
-        not read back as written (missing or truncated file, other shapes) is removed with a
-        warning, so the caller rebuilds it."""
+        """The stored model of `key` (its rows read when asked for); None when there is none. A
+        folder that does not read back as written (missing or truncated file, other shapes) is
+        removed with a warning, so the caller rebuilds it."""
         folder = self.path(key)
         if not folder.is_dir():
             self._held.pop(key, None)

@@ -1,8 +1,9 @@
 """File formats: the model folder (mesh.vtu + model.json) read as a held, factorised model, the run
-folder of the indentation experiments (written and read), and VTU/PVD output of solutions.
+folder of the indentation experiments (written and read), VTU/PVD output of solutions, and the
+row files of stored response models.
 
 Modules: modelfolder (read_model, held regions, factorise), runfolder (write_run, IndentRun), vtu
-(write_solution, write_vtu).
+(write_solution, write_vtu), rows (quantise, write_rows, RowFile), nwb.
 """
 from fingertip.lazy import lazy_exports
 
