@@ -131,6 +131,18 @@ def force_table(unit: str, depths, reference, penetration, ours: dict) -> list[s
     return lines
 
 
+def report(path: Path, heading: str, setup: str, lines: list[str], ngsolve: tuple, runs, write: bool) -> None:
+    """Print the table `lines` and a line of run times (NGSolve's (DOFs, seconds, settings); this
+    project's runs [(size mm, DOFs, seconds)]) and, with `write`, put them in the results file
+    `path` under `heading` and the `setup` paragraph."""
+    dofs, seconds, settings = ngsolve
+    text = "\n".join(lines + ["", f"NGSolve: {dofs:,} DOFs, {seconds:.1f} s ({settings}); this project: "
+                               + ", ".join(f"{s:g} mm {n:,} DOFs {t:.1f} s" for s, n, t in runs) + "."])
+    print(text)
+    if write:
+        path.write_text(f"# {heading}\n\n{setup}\n\n{text}\n")
+
+
 def ngsolve_forces(mu: float, lam: float, depths, maxh_top_mm: float = MAXH_TOP_MM, order: int = ORDER):
     """(force (n,) N/mm at depths, largest penetration (n,) mm, seconds, DOFs) from NGSolve: the
     displacement-only energy (the pressure eliminated, p = kappa (J - 1)) of order `order`, the
@@ -199,16 +211,11 @@ def main():
     mu, lam = float(model.mu[0]), float(model.lam[0])
     ref, pen, ng_s, ng_dofs = ngsolve_forces(mu, lam, DEPTHS_MM)
     lines = force_table("N/mm", DEPTHS_MM, ref, pen, {s: {"force": f} for s, (f, *_) in zip(args.sizes, ours)})
-    lines += ["", f"NGSolve: {ng_dofs:,} DOFs, {ng_s:.1f} s (mesh, {len(DEPTHS_MM)} depths in "
-              f"{STEP_MM:g} mm steps); this project: "
-              + ", ".join(f"{s:g} mm {n:,} DOFs {t:.1f} s" for s, (_, t, n, _) in zip(args.sizes, ours)) + "."]
-    text = "\n".join(lines)
-    print(text)
-    if not args.no_write:
-        RESULTS.write_text("# Neo-Hookean contact against NGSolve (plane strain)\n\n"
-                           f"Cylinder radius {RADIUS_MM:g} mm into the 40 x 18 mm block, {MATERIAL} "
-                           f"(mu {mu:.6g} MPa, lambda {lam:.6g} MPa), `python benchmarks/ngsolve_contact.py`\n\n"
-                           + text + "\n")
+    report(RESULTS, "Neo-Hookean contact against NGSolve (plane strain)",
+           f"Cylinder radius {RADIUS_MM:g} mm into the 40 x 18 mm block, {MATERIAL} (mu {mu:.6g} MPa, "
+           f"lambda {lam:.6g} MPa), `python benchmarks/ngsolve_contact.py`", lines,
+           (ng_dofs, ng_s, f"mesh, {len(DEPTHS_MM)} depths in {STEP_MM:g} mm steps"),
+           [(s, n, t) for s, (_, t, n, _) in zip(args.sizes, ours)], not args.no_write)
 
 
 if __name__ == "__main__":

@@ -48,7 +48,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from ngsolve_contact import PENALTY_MPA_PER_MM, STEP_MM, force_table, solve_penalised  # noqa: E402
+from ngsolve_contact import PENALTY_MPA_PER_MM, STEP_MM, force_table, report, solve_penalised  # noqa: E402
 
 from fem.verify.closed_forms import hertz_sphere  # noqa: E402
 
@@ -176,17 +176,13 @@ def main():
     hertz = hertz_sphere(RADIUS_MM, DEPTHS_MM, E_MPA, NU)[0]
     lines += ["", "Hertz (half-space, small strain) for scale: "
               + ", ".join(f"{d:g} mm {f:.4g} N" for d, f in zip(DEPTHS_MM, hertz)) + "."]
-    lines += ["", f"NGSolve: {ng_dofs:,} DOFs, {ng_s:.1f} s (mesh, {len(DEPTHS_MM)} depths in "
-              f"{STEP_MM:g} mm steps, maxh {args.maxh:g} mm under the sphere); this project: "
-              + ", ".join(f"{s:g} mm {n:,} DOFs {t:.1f} s" for s, (_, _, t, n) in zip(args.sizes, ours)) + "."]
-    text = "\n".join(lines)
-    print(text)
-    if not args.no_write:
-        RESULTS.write_text("# Neo-Hookean sphere indentation against NGSolve (3D)\n\n"
-                           f"Sphere radius {RADIUS_MM:g} mm into a {2 * BLOCK_MM:g} x {BLOCK_MM:g} x "
-                           f"{2 * BLOCK_MM:g} mm block (a quarter modelled), E {E_MPA:g} MPa, nu {NU:g} "
-                           f"(mu {mu:.6g} MPa, lambda {lam:.6g} MPa), `python benchmarks/ngsolve_sphere.py`\n\n"
-                           + text + "\n")
+    report(RESULTS, "Neo-Hookean sphere indentation against NGSolve (3D)",
+           f"Sphere radius {RADIUS_MM:g} mm into a {2 * BLOCK_MM:g} x {BLOCK_MM:g} x {2 * BLOCK_MM:g} mm block (a "
+           f"quarter modelled), E {E_MPA:g} MPa, nu {NU:g} (mu {mu:.6g} MPa, lambda {lam:.6g} MPa), "
+           "`python benchmarks/ngsolve_sphere.py`", lines,
+           (ng_dofs, ng_s, f"mesh, {len(DEPTHS_MM)} depths in {STEP_MM:g} mm steps, maxh {args.maxh:g} mm under "
+                           "the sphere"),
+           [(s, n, t) for s, (_, _, t, n) in zip(args.sizes, ours)], not args.no_write)
 
 
 if __name__ == "__main__":
