@@ -184,6 +184,18 @@ class FiniteContact:
         res.kkt["iterations"] = r.iterations
         return res
 
+    def contact_loads(self, r: FiniteResult, along=None) -> np.ndarray:
+        """(ndof,) nodal forces [N; N/mm in 2D] the indentor applies in result `r`: each candidate's
+        force along its normal in the deformed configuration, or along the unit vector `along` (3,)
+        instead. The linear solver under the first is the small-depth limit of `r`
+        (`benchmarks/finite_small_depth.py`); the linear contact solver's own forces act along the
+        approach, the second with along = approach."""
+        d = self.model.dim
+        direction = r.normal[:, :d] if along is None else np.broadcast_to(np.asarray(along, float)[:d], (len(self.dofs), d))
+        f = np.zeros(self.model.ndof)
+        np.add.at(f, self.dofs, r.contact_force_N[:, None] * direction)
+        return f
+
     def edge_area_mm2(self, result: ContactResult) -> float:
         """Tributary area [mm^2; mm in 2D] of a contact result's outer ring
         (`fem.contact.facets.edge_area_mm2`): what its node-counted area cannot resolve."""
