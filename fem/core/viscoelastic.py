@@ -34,7 +34,6 @@ from dataclasses import dataclass
 from itertools import pairwise
 
 import numpy as np
-from scipy.optimize import brentq
 
 from fingertip.errors import InputError
 
@@ -82,6 +81,9 @@ class Prony:
         exp(-t / lambda_k): J_inf = 1 / g_inf, sum j_k = J_inf - 1. With u = 1 / lambda, the
         roots of phi(u) = g_inf - sum g_i tau_i u / (1 - tau_i u) (= s g^(s) at s = -u), one below
         the slowest rate 1 / tau and one between each pair of rates; j_k = lambda_k / phi'(s_k)."""
+        # imported here: scipy.optimize would cost every command 50 ms
+        from scipy.optimize import brentq
+
         g, tau = np.asarray(self.g), np.asarray(self.tau_s)
         order = np.argsort(-tau)
         g, tau = g[order], tau[order]
