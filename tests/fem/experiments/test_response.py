@@ -215,14 +215,14 @@ def test_mesh_hash_is_remembered_until_the_mesh_changes(cyl8, tmp_path, monkeypa
 
 def test_repeat_run_without_plots_imports_no_matplotlib(cyl8, tmp_path):
     """A stored model answers a --no-plots --no-pvd run: no PNG written, and neither matplotlib,
-    fem.plots nor the factorisation's PARDISO loaded."""
+    fem.plots, the factorisation's PARDISO nor scipy.optimize (50 ms of a 0.6 s command) loaded."""
     import subprocess
     import sys
 
     assert pipeline.main(["prepare", str(cyl8), "--quiet"]) == 0
     out = tmp_path / "run"
     code = ("import sys, pipeline; assert pipeline.main(sys.argv[1:]) == 0; "
-            "print(sorted(m for m in ('matplotlib', 'fem.plots', 'pypardiso') if m in sys.modules))")
+            "print(sorted(m for m in ('matplotlib', 'fem.plots', 'pypardiso', 'scipy.optimize') if m in sys.modules))")
     done = subprocess.run([sys.executable, "-c", code, "indent", str(cyl8), "--indentor", "C5", "--depth",
                            "0.25:1:0.25", "--no-pvd", "--no-plots", "--out", str(out), "--quiet"],
                           capture_output=True, text=True, cwd=ROOT, check=True)
