@@ -218,10 +218,11 @@ class FiniteContact:
         x[:, :self.model.dim] += u[self.dofs]
         return x
 
-    def indent(self, indentor, depths_mm, partial: bool = False, progress=None) -> list[FiniteResult]:
-        """Results at increasing depths (mm beyond first touch of the undeformed surface). A depth
-        that cannot be reached (Newton fails after MAX_CUTS halvings of the step) raises
-        RuntimeError, or with partial=True ends the list there, the reason in `stopped`."""
+    def indent(self, indentor, depths_mm, partial: bool = False, progress=None, tol=None) -> list[FiniteResult]:
+        """Results at increasing depths (mm beyond first touch of the undeformed surface), each
+        solved to the relative residual tol (default `tol`). A depth that cannot be reached (Newton
+        fails after MAX_CUTS halvings of the step) raises RuntimeError, or with partial=True ends
+        the list there, the reason in `stopped`."""
         self.stopped = None
         surf = RigidSurface(indentor)
         depths = np.asarray(depths_mm, float)
@@ -231,7 +232,7 @@ class FiniteContact:
         u, lam, depth, out = np.zeros(self.model.ndof), np.zeros(len(self.dofs)), 0.0, []
         for target in depths:
             try:
-                u, lam, its = self._advance(u, lam, surf, t0, depth, target)
+                u, lam, its = self._advance(u, lam, surf, t0, depth, target, tol)
             except RuntimeError as exc:
                 self.stopped = str(exc)
                 if partial:
@@ -282,7 +283,7 @@ class FiniteContact:
                 side = 1
         raise RuntimeError(f"finite contact: {force_N:g} N not bracketed to {rtol:g} in 60 trials")
 
-    def _advance(self, u, lam, surf, t0, depth, target):
+    def _advance(self, u, lam, surf, t0, depth, target, tol=None):
         """(u, lambda, Newton iterations) at depth `target` from the state (u, lambda) at `depth`,
         in steps of at most STEP_MM, halved up to MAX_CUTS times when Newton fails. Each step's
         Newton starts from the last two states' linear extrapolation (when it inverts no element)."""
@@ -295,7 +296,7 @@ class FiniteContact:
                 start = guess if self.nh.jacobian(guess).min() > 0 else u
             try:
                 u_new, lam_new, its = self._newton(start, lam, surf, t0 + trial,
-                                                   None if trial >= target - 1e-12 else PASSING_TOL)
+                                                   tol if trial >= target - 1e-12 else PASSING_TOL)
             except (FloatingPointError, RuntimeError) as exc:
                 cuts += 1
                 step /= 2

@@ -88,6 +88,7 @@ class ExperimentRun:
     viscoelastic: dict | None = None    # a relaxed time course's method and forces (run.json's "viscoelastic")
     stepped: object = None              # a course stepped in time: its fem.experiments.stepping.Stepped
     finite_fields: list | None = None   # finite kinematics with a PVD: [(u (ndof,) mm, {measure: (M,)})] per step
+    finite_states: list | None = None   # finite kinematics: the fem.contact.finite.FiniteResult of each step
 
     @property
     def name(self) -> str:
@@ -101,7 +102,8 @@ class SceneRun:
     the receptor line ((axis, mm) or None), warnings about the placement and the stored response
     models used ([(key, "stored" or "built", build seconds, bytes)], `fem.experiments.response`) and
     the afferents ((population, {experiment name: response}), `fem.receptors.afferents`; (None, {})
-    without [afferents])."""
+    without [afferents]). With finite kinematics the contact model is None and `finite` the
+    FiniteContact that solved the steps (each experiment's `finite_states`)."""
     model: object
     info: dict
     scene: Scene
@@ -116,6 +118,7 @@ class SceneRun:
     responses: list = field(default_factory=list)
     afferents: tuple = (None, {})
     peak_pressure_radius_mm: float = PEAK_PRESSURE_RADIUS_MM
+    finite: object = None               # finite kinematics: the fem.contact.finite.FiniteContact that solved it
 
     def peak_pressure_MPa(self, force_N) -> float:
         """The largest contact pressure [MPa] averaged over peak_pressure_radius_mm of nodal forces
@@ -305,12 +308,13 @@ def finite_experiments(model, info, scene: Scene, progress, only: int | None = N
         states = {id(r): (ind, r) for _, ind, r in course}     # a hold repeats a state: once each
         results = {k: fc.contact_result(ind, r, sampler) for k, (ind, r) in states.items()}
         run.steps = [(np.asarray(off, float), results[id(r)]) for off, _, r in course]
+        run.finite_states = [r for _, _, r in course]
         if writes_pvd(scene.output, len(course)):
             fields = {k: (r.u, fc.element_fields(r.u)) for k, (_, r) in states.items()}
             run.finite_fields = [fields[id(r)] for _, _, r in course]
         run.seconds += time.perf_counter() - t0
     return SceneRun(model, info, scene, None, sn, grid, sampler.with_energy(), list(scene.receptors.measures), line,
-                    runs, warnings, [])
+                    runs, warnings, [], finite=fc)
 
 
 def finite_course(fc: FiniteContact, run: ExperimentRun, progress) -> list:

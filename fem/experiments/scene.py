@@ -577,14 +577,13 @@ class Scene:
 
     def check_kinematics(self) -> None:
         """Raise InputError for what finite kinematics does not run yet (fem.contact.finite): scans,
-        viscoelastic layers, afferents and indentors `fem.contact.surfaces.RigidSurface` does not
-        model (`check_modelled`)."""
+        viscoelastic layers and indentors `fem.contact.surfaces.RigidSurface` does not model
+        (`check_modelled`)."""
         if self.kinematics not in ("linear", "finite"):
             raise InputError(f'kinematics must be "linear" or "finite", got {self.kinematics!r}')
         if self.kinematics == "linear":
             return
-        why = ("viscoelastic layers" if self.viscoelastic is not None else
-               "afferents" if self.afferents is not None else None)
+        why = "viscoelastic layers" if self.viscoelastic is not None else None
         for exp in self.experiments:
             if why is None and exp.trace is not None and exp.trace.shape == "scan":
                 why = f"experiment '{exp.name}': a scan"

@@ -7,7 +7,9 @@ frictionless contact), so the inputs of a course are tabulated over the load
 (`fem.experiments.traces.course`, in closed form): the number of sample times then sets the
 rows of the output tables, not the spikes. The table starts at the loads of the sample times and
 is refined by bisection until linear interpolation between its loads is within TABLE_TOLERANCE
-of the inputs solved at the midpoints (`tabulate`). Viscoelastic layers relax the tabulated
+of the inputs solved at the midpoints (`tabulate`). Frictionless contact of the hyperelastic
+model (finite kinematics) has no memory of its path either: its table is built from the finite
+states, their Cauchy stress or stored energy (`finite_tabulate`). Viscoelastic layers relax the tabulated
 elastic stress at 5 kHz (`fem.receptors.afferents.respond`); under force control the course's
 load is the elastic force that the creep gives (`fem.experiments.viscoelastic`). A scan moves the
 indentor, and layers with their own spectra make the path matter (`fem.experiments.stepping`):
@@ -39,6 +41,9 @@ TABLE_TOLERANCE = 0.002
 largest value of that input (static, deflection) in the table (`tabulate`)."""
 MAX_TABLE_LOADS = 257
 """Most loads a table may hold (the refinement stops there)."""
+FINITE_TABLE_TOL = 1e-5
+"""Relative residual to which finite kinematics solves a table's midpoints (`finite_tabulate`):
+they enter the table only to TABLE_TOLERANCE."""
 
 
 def load_value(load: dict) -> float:
@@ -73,14 +78,60 @@ def tabulate(sampler, population: Population, contact, run, measure: str = "stre
     for (_, load), (_, res) in zip(elastic_indentations(exp, law), run.steps):
         first.setdefault(float(f"{load_value(load):.12g}"), res)
     loads = np.array(sorted(first))
-    static, deflection = inputs([first[v] for v in loads])
     full = exp.loads[0]
-    pending = list(pairwise(loads))
     contact.restart()                 # the table does not depend on the experiments before it
+    return _refined(loads, *inputs([first[v] for v in loads]), tolerance,
+                    lambda mid: inputs([contact.indent(run.indentor, **_indentation(full, v)) for v in mid]))
+
+
+def finite_tabulate(fc, sampler, population: Population, run, measure: str = "stress",
+                    tolerance: float = TABLE_TOLERANCE) -> LoadTable:
+    """`tabulate` with finite kinematics: `fc` (a fem.contact.finite.FiniteContact) solved the
+    run's `finite_states`; the static input of a state is -n.sigma.n of its Cauchy stress
+    ('stress', compression positive) or its stored energy per reference volume ('sed') [MPa] at
+    the afferents (`FiniteContact.observe`), the deflection its displacement along the approach
+    above each. Midpoints are solved from rest: the depths as one increasing series, each force
+    on its own (frictionless hyperelastic contact has no memory of its path)."""
+    exp, pop, ind = run.experiment, population, run.indentor
+    with_energy = sampler.with_energy()
+
+    def inputs(states):
+        static, deflection = [], []
+        for r in states:
+            values = fc.observe(r.u, sampler)
+            if measure == "sed":
+                static.append(with_energy.measures(values, ["sed_MPa"])["sed_MPa"])
+            else:
+                stress = with_energy.state(values).stress
+                static.append(-np.einsum("ni,nij,nj->n", pop.normal, stress, pop.normal))
+            deflection.append(pop.at_sites(r.u[fc.dofs] @ ind.approach[:fc.model.dim]))
+        return np.stack(static, axis=1), np.stack(deflection, axis=1)
+
+    full = exp.loads[0]
+
+    def solve(mid):
+        if "force_N" not in full:
+            return inputs(fc.indent(ind, list(mid), tol=FINITE_TABLE_TOL))
+        return inputs([fc.indent(ind, [0.0])[0] if v <= 0 else fc.indent_force(ind, v, full.get("max_depth_mm"))
+                       for v in mid])
+
+    first = {}
+    for (_, load), r in zip(exp.indentations, run.finite_states):
+        first.setdefault(float(f"{load_value(load):.12g}"), r)
+    loads = np.array(sorted(first))
+    return _refined(loads, *inputs([first[v] for v in loads]), tolerance, solve)
+
+
+def _refined(loads, static, deflection, tolerance: float, solve) -> LoadTable:
+    """A LoadTable from inputs static, deflection (n, m) at loads (m,) increasing, refined by
+    bisection: solve(mid (k,) increasing) -> (static (n, k), deflection (n, k)) at new loads, for
+    the midpoint of every interval whose linear interpolation misses them by more than `tolerance`
+    of the table's largest value, until none does (or MAX_TABLE_LOADS)."""
+    pending = list(pairwise(loads))
     while pending and len(loads) < MAX_TABLE_LOADS:
         pending = pending[:MAX_TABLE_LOADS - len(loads)]
         mid = np.array([0.5 * (a + b) for a, b in pending])
-        s_mid, w_mid = inputs([contact.indent(run.indentor, **_indentation(full, v)) for v in mid])
+        s_mid, w_mid = solve(mid)
         s_lin, w_lin = LoadTable(loads, static, deflection).at(mid)
         peak_s = max(np.abs(static).max(initial=0.0), np.abs(s_mid).max(initial=0.0)) or 1.0
         peak_w = max(np.abs(deflection).max(initial=0.0), np.abs(w_mid).max(initial=0.0)) or 1.0
@@ -127,7 +178,7 @@ def scene_responses(scene_run) -> tuple[Population | None, dict]:
         return None, {}
     model, law = scene_run.model, scene_run.scene.viscoelastic
     first = next(r for r in scene_run.experiments if r.experiment.times_s is not None)
-    points = scene_run.contact.points_mm
+    points = scene_run.surface.x                  # the contact candidates (the contact model's points)
     centre = points[np.argmin(first.indentor.standoff(points))]
     pop = place(model, scene_run.surface, cfg.classes, dict(cfg.density_per_cm2 or ()), centre, cfg.radius_mm,
                 cfg.seed, cfg.sites_mm)
@@ -145,7 +196,8 @@ def scene_responses(scene_run) -> tuple[Population | None, dict]:
                 static, deflection = experiment_inputs(sampler, pop, scene_run.contact, run, cfg.input)
             out[run.name] = respond(pop, exp.times_s, static, deflection, cfg.gain, cfg.noisy, cfg.seed)
             continue
-        table = tabulate(sampler, pop, scene_run.contact, run, cfg.input, law)
+        table = (finite_tabulate(scene_run.finite, sampler, pop, run, cfg.input) if scene_run.finite is not None
+                 else tabulate(sampler, pop, scene_run.contact, run, cfg.input, law))
         at_samples = table.at([load_value(load) for _, load in elastic_indentations(exp, law)])
         resp = respond(pop, exp.times_s, *at_samples, cfg.gain, cfg.noisy, cfg.seed,
                        fine=table.at(fine_loads(exp, law)), law=law)
