@@ -30,7 +30,7 @@ from fem.core.materials import FLUID_LAYER
 from fem.core.viscoelastic import LayerLaws
 from fem.experiments.response import ResponseStore, contact_model, stored_responses
 from fem.experiments.scene import AXES, Experiment, Receptors, Scene, line_text
-from fem.experiments.spiking import scene_responses
+from fem.experiments.spiking import scene_population, scene_responses
 from fem.experiments.stepping import stepped_course
 from fem.experiments.traces import frequency_warning
 from fem.experiments.viscoelastic import elastic_indentations, relaxed_steps
@@ -458,7 +458,8 @@ def validity_warning(run: ExperimentRun) -> str | None:
 def _plan(model, info, scene: Scene):
     """(contact region's SurfaceNodes, [ExperimentRun without steps], warnings (placement, sines
     above the quasi-static limit), (P,) bool candidates the scene can reach, receptor line,
-    receptor grid) of a scene."""
+    receptor grid) of a scene. Its afferents are placed once here to refuse what cannot be
+    placed (a 2D model, a site off the pad, no pad within the radius) before anything is solved."""
     scene.check_dim(model.dim)
     scene.check_count()
     sn = model.surface_nodes(CONTACT_REGION[model.dim])
@@ -473,6 +474,8 @@ def _plan(model, info, scene: Scene):
         exp = within_tissue(exp, tissue)
         touched |= reach(sn.x, ind, exp.offsets_mm, deepest_mm(exp))
         runs.append(ExperimentRun(exp, place, ind, tissue_mm=tissue))
+    if scene.afferents is not None:       # placed here too: a site off the pad is refused before any solve
+        scene_population(scene.afferents, model, sn, runs)
     rc = scene.receptors
     check_receptor_depths(model, info, sn, rc.depths_mm)
     line = receptor_line(rc.line, sn, model.dim)
@@ -551,6 +554,8 @@ def run_scene(model_dir, scene: Scene, store=None, map=None, progress=None) -> S
     progress = as_progress(progress)
     scene.check_dim(folder_dim(folder_info(model_dir)))
     model, info = read_model(model_dir, scene.material, scene.nu)
+    if scene.afferents is not None:     # their placement refused before the notes below (`_plan`)
+        _plan(model, info, scene)
     if store is not None and (why := store_blocker(scene)):
         progress.note(f"response model: not used, {why}: factorising"
                       + (" (--no-pvd answers from the stored response models)" if "PVD" in why else ""))

@@ -169,19 +169,26 @@ def stepped_inputs(model, population: Population, run, sampler) -> np.ndarray:
                                 population.normal) for j in range(len(times))], axis=1)
 
 
+def scene_population(cfg, model, surface, runs) -> Population:
+    """The population of a scene's [afferents] `cfg` over the contact region's candidates
+    `surface` (fem.core.model.SurfaceNodes): at its sites_mm, or by density around where the
+    first traced experiment of `runs` (fem.experiments.runner.ExperimentRun) touches (`place`,
+    seeded: the same population every call)."""
+    first = next(r for r in runs if r.experiment.times_s is not None)
+    centre = surface.x[np.argmin(first.indentor.standoff(surface.x))]
+    return place(model, surface, cfg.classes, dict(cfg.density_per_cm2 or ()), centre, cfg.radius_mm, cfg.seed,
+                 cfg.sites_mm)
+
+
 def scene_responses(scene_run) -> tuple[Population | None, dict]:
     """(the population, {experiment name: PopulationResponse}) of a fem.experiments.runner.SceneRun
-    whose scene has [afferents]: every traced experiment drives the same population (placed
-    once: at the scene's sites_mm, or by density around where the first traced experiment touches). (None, {}) without [afferents]."""
+    whose scene has [afferents]: every traced experiment drives the same population
+    (`scene_population`). (None, {}) without [afferents]."""
     cfg = scene_run.scene.afferents
     if cfg is None:
         return None, {}
     model, law = scene_run.model, scene_run.scene.viscoelastic
-    first = next(r for r in scene_run.experiments if r.experiment.times_s is not None)
-    points = scene_run.surface.x                  # the contact candidates (the contact model's points)
-    centre = points[np.argmin(first.indentor.standoff(points))]
-    pop = place(model, scene_run.surface, cfg.classes, dict(cfg.density_per_cm2 or ()), centre, cfg.radius_mm,
-                cfg.seed, cfg.sites_mm)
+    pop = scene_population(cfg, model, scene_run.surface, scene_run.experiments)
     sampler = sampler_of(model, pop)
     out = {}
     for run in scene_run.experiments:

@@ -239,3 +239,26 @@ def test_finite_kinematics_tables_the_afferent_inputs_of_its_own_states(shop):
     fin, lin = tables["finite"], tables["linear"]
     assert fin.static[:, -1] == pytest.approx(lin.static[:, -1], rel=0.05)
     assert fin.deflection_mm[:, -1] == pytest.approx(lin.deflection_mm[:, -1], rel=0.05)
+
+
+def test_a_site_off_the_pad_is_refused_before_anything_is_solved(shop, tmp_path, capsys, monkeypatch):
+    """An afferent site 10 mm from the pad: one error line, exit 2, no run folder, and no
+    factorisation or large-deformation solve started (both kinematics)."""
+    from fem.contact.finite import FiniteContact
+    from fem.core.model import Model
+
+    def solving(*args, **kwargs):
+        raise AssertionError("solved before the refusal")
+
+    monkeypatch.setattr(Model, "system", solving)
+    monkeypatch.setattr(FiniteContact, "indent", solving)
+    for kinematics in ("linear", "finite"):
+        scene = tmp_path / f"{kinematics}.toml"
+        scene.write_text(f'kinematics = "{kinematics}"\n[afferents]\nclasses = ["SA1"]\nsites_mm = [[0.0, 30.0, 5.0]]\n'
+                         '[[experiment]]\nindentor = "sphere:3"\ndepth_mm = 0.5\n'
+                         '[experiment.trace]\nshape = "ramp_hold"\nsamples = 10\n')
+        out = tmp_path / f"run_{kinematics}"
+        assert pipeline.main(["indent", str(shop.preset("monkey")), "--scene", str(scene), "--out", str(out)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("error:") and "from the pad surface" in err[0], err
+        assert not out.exists()
