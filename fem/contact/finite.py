@@ -201,7 +201,8 @@ class FiniteContact:
         (`benchmarks/finite_small_depth.py`); the linear contact solver's own forces act along the
         approach, the second with along = approach."""
         d = self.model.dim
-        direction = r.normal[:, :d] if along is None else np.broadcast_to(np.asarray(along, float)[:d], (len(self.dofs), d))
+        direction = (r.normal[:, :d] if along is None
+                     else np.broadcast_to(np.asarray(along, float)[:d], (len(self.dofs), d)))
         f = np.zeros(self.model.ndof)
         np.add.at(f, self.dofs, r.contact_force_N[:, None] * direction)
         return f
