@@ -102,8 +102,7 @@ class SceneRun:
     the receptor line ((axis, mm) or None), warnings about the placement and the stored response
     models used ([(key, "stored" or "built", build seconds, bytes)], `fem.experiments.response`) and
     the afferents ((population, {experiment name: response}), `fem.receptors.afferents`; (None, {})
-    without [afferents]). With finite kinematics the contact model is None and `finite` the
-    FiniteContact that solved the steps (each experiment's `finite_states`)."""
+    without [afferents])."""
     model: object
     info: dict
     scene: Scene
@@ -118,7 +117,7 @@ class SceneRun:
     responses: list = field(default_factory=list)
     afferents: tuple = (None, {})
     peak_pressure_radius_mm: float = PEAK_PRESSURE_RADIUS_MM
-    finite: object = None               # finite kinematics: the fem.contact.finite.FiniteContact that solved it
+    finite: object = None               # finite kinematics: the fem.contact.finite.FiniteContact (no contact model)
 
     def peak_pressure_MPa(self, force_N) -> float:
         """The largest contact pressure [MPa] averaged over peak_pressure_radius_mm of nodal forces
@@ -458,8 +457,7 @@ def validity_warning(run: ExperimentRun) -> str | None:
 def _plan(model, info, scene: Scene):
     """(contact region's SurfaceNodes, [ExperimentRun without steps], warnings (placement, sines
     above the quasi-static limit), (P,) bool candidates the scene can reach, receptor line,
-    receptor grid) of a scene. Its afferents are placed once here to refuse what cannot be
-    placed (a 2D model, a site off the pad, no pad within the radius) before anything is solved."""
+    receptor grid) of a scene; refuses afferents it cannot place (`scene_population`) before any solve."""
     scene.check_dim(model.dim)
     scene.check_count()
     sn = model.surface_nodes(CONTACT_REGION[model.dim])
@@ -474,7 +472,7 @@ def _plan(model, info, scene: Scene):
         exp = within_tissue(exp, tissue)
         touched |= reach(sn.x, ind, exp.offsets_mm, deepest_mm(exp))
         runs.append(ExperimentRun(exp, place, ind, tissue_mm=tissue))
-    if scene.afferents is not None:       # placed here too: a site off the pad is refused before any solve
+    if scene.afferents is not None:
         scene_population(scene.afferents, model, sn, runs)
     rc = scene.receptors
     check_receptor_depths(model, info, sn, rc.depths_mm)
@@ -579,15 +577,12 @@ def run_scene(model_dir, scene: Scene, store=None, map=None, progress=None) -> S
 
 def store_blocker(scene: Scene) -> str | None:
     """Why stored response models cannot answer a scene (None when they can)."""
-    if scene.afferents is not None:
-        return "afferents need the stresses at their own sites"
-    if isinstance(scene.viscoelastic, LayerLaws):
-        return "viscoelastic layers with their own spectra are stepped in time on the factorised model"
-    if scene.kinematics == "finite":
-        return "finite kinematics solves the neo-Hookean model"
-    if any(writes_pvd(scene.output, len(e.indentations)) for e in scene.experiments):
-        return "the PVD output needs full fields"
-    return None
+    return ("afferents need the stresses at their own sites" if scene.afferents is not None else
+            "viscoelastic layers with their own spectra are stepped in time on the factorised model"
+            if isinstance(scene.viscoelastic, LayerLaws) else
+            "finite kinematics solves the neo-Hookean model" if scene.kinematics == "finite" else
+            "the PVD output needs full fields"
+            if any(writes_pvd(scene.output, len(e.indentations)) for e in scene.experiments) else None)
 
 
 def distribution_blocker(scene: Scene, store=None) -> str | None:
