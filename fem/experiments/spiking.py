@@ -33,6 +33,7 @@ from fem.receptors.afferents import (
     respond,
     sampler_of,
     site_inputs,
+    static_input,
 )
 from fem.receptors.transduction import lif_times
 
@@ -96,15 +97,8 @@ def finite_tabulate(fc, sampler, population: Population, run, measure: str = "st
     with_energy = sampler.with_energy()
 
     def inputs(states):
-        static, deflection = [], []
-        for r in states:
-            values = fc.observe(r.u, sampler)
-            if measure == "sed":
-                static.append(with_energy.measures(values, ["sed_MPa"])["sed_MPa"])
-            else:
-                stress = with_energy.state(values).stress
-                static.append(-np.einsum("ni,nij,nj->n", pop.normal, stress, pop.normal))
-            deflection.append(pop.at_sites(r.u[fc.dofs] @ ind.approach[:fc.model.dim]))
+        static = [static_input(with_energy, pop, fc.observe(r.u, sampler), measure) for r in states]
+        deflection = [pop.at_sites(r.u[fc.dofs] @ ind.approach[:fc.model.dim]) for r in states]
         return np.stack(static, axis=1), np.stack(deflection, axis=1)
 
     full = exp.loads[0]
@@ -112,8 +106,7 @@ def finite_tabulate(fc, sampler, population: Population, run, measure: str = "st
     def solve(mid):
         if "force_N" not in full:
             return inputs(fc.indent(ind, list(mid), tol=FINITE_TABLE_TOL))
-        return inputs([fc.indent(ind, [0.0])[0] if v <= 0 else fc.indent_force(ind, v, full.get("max_depth_mm"))
-                       for v in mid])
+        return inputs([fc.indent_force(ind, v, full.get("max_depth_mm")) for v in mid])     # mid > 0
 
     first = {}
     for (_, load), r in zip(exp.indentations, run.finite_states):
@@ -165,8 +158,7 @@ def stepped_inputs(model, population: Population, run, sampler) -> np.ndarray:
     groups = run.stepped.group_values(model, lambda m: m.stress_operator(sampler.points_mm))
     rows = sampler.operator @ run.stepped.displacement_mm
     rows[sampler.stress_rows] = sum(v if law is None else law.relax(times, v.T).T for law, v in groups)
-    return np.stack([-np.einsum("ni,nij,nj->n", population.normal, sampler.state(rows[:, j]).stress,
-                                population.normal) for j in range(len(times))], axis=1)
+    return np.stack([static_input(sampler, population, rows[:, j]) for j in range(len(times))], axis=1)
 
 
 def scene_population(cfg, model, surface, runs) -> Population:

@@ -180,12 +180,18 @@ def site_inputs(sampler, population: Population, compliance, forces_N, measure: 
     values = sampler.operator @ compliance.displacement(np.asarray(forces_N, float).reshape(len(forces_N), -1))
     out = np.empty((len(population), values.shape[1]))
     for j in range(values.shape[1]):
-        if measure == "sed":
-            out[:, j] = sampler.measures(values[:, j], ["sed_MPa"])["sed_MPa"]
-        else:
-            stress = sampler.state(values[:, j]).stress
-            out[:, j] = -np.einsum("ni,nij,nj->n", population.normal, stress, population.normal)
+        out[:, j] = static_input(sampler, population, values[:, j], measure)
     return out
+
+
+def static_input(sampler, population: Population, values, measure: str = "stress") -> np.ndarray:
+    """(n,) static input at each afferent from one output `values` of its sampler (`sampler_of`,
+    or its `with_energy` for a finite state): 'stress' -n.sigma.n [MPa] (compression positive) or
+    'sed' [MPa]."""
+    if measure == "sed":
+        return sampler.measures(values, ["sed_MPa"])["sed_MPa"]
+    stress = sampler.state(values).stress
+    return -np.einsum("ni,nij,nj->n", population.normal, stress, population.normal)
 
 
 def experiment_inputs(sampler, population: Population, contact, run, measure: str = "stress"):
