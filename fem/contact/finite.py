@@ -23,7 +23,10 @@ its straight direction in 3D: a cylinder's axis, the edge's line, the step's len
 pressure block as in NeoHookean), and then moves the active set: nodes whose multiplier turns
 negative leave, nodes that penetrate by more than GAP_TOL_MM join. An iteration whose residual
 fell by CHORD since the last (or, falling at that rate, reaches the tolerance within FINISH more
-iterations) is solved on the last factorisation (a chord step). It stops when the active set
+iterations) is solved on the last factorisation (a chord step). In 3D, where a factorisation costs
+about 30 solves, any other iteration is first solved with its own tangent by GMRES on the last
+factorisation (`_krylov`, a Newton-Krylov step), and factorises only when that does not reach
+ETA of the residual within KRYLOV_MAX iterations. It stops when the active set
 is stable, the free residual is below `tol` of the contact force (1e-8: the solves skip iterative
 refinement, so the last iterations converge linearly, and each further digit of the residual costs
 about one more tangent while the force is settled to 9-10 digits) and every gap is within GAP_TOL_MM,
@@ -32,8 +35,8 @@ penalty stiffness to tune and no penetration left by one, and sliding of the ski
 indentor comes with the normal projection. (Mortar methods pay off between two deformable bodies
 with non-matching meshes; against a rigid analytic surface node-to-surface is exact.)
 
-The indentor travels in depth increments of STEP_MM (halved when Newton fails, up to MAX_CUTS
-times); the increments on the way to a depth asked for are solved to PASSING_TOL only.
+The indentor travels in depth increments of STEP_MM[dimension] (halved when Newton fails, up to
+MAX_CUTS times); the increments on the way to a depth asked for are solved to PASSING_TOL only.
 
     fc = FiniteContact(model, "surface", held_regions(model))
     results = fc.indent(make_indentor("C5"), [0.5, 1.0, 2.0])
@@ -45,6 +48,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg as sla
 import scipy.sparse as sp
 
 from fem.contact.facets import edge_area_mm2, fe_facets, node_pairs, smoothed_pressure
@@ -55,8 +59,12 @@ from fem.core.measures import State, evaluate
 from fem.core.neohookean import NeoHookean
 from fingertip.errors import InputError
 
-STEP_MM = 0.1
-"""Depth increment of the load stepping (mm)."""
+STEP_MM = {2: 0.1, 3: 0.25}
+"""Depth increment of the load stepping (mm) per dimension. Measured (C5, forces equal to 1e-8):
+the 2D cylinder8 with bone 0.25:2:0.25 mm 6.8-7.0 s at 0.1 mm, 16.8 s at 0.25 mm (a 2D
+factorisation costs about one solve: Newton's iterations are what costs); the 1 mm monkey,
+perpendicular, 0.5:2:0.5 mm in process, with Newton-Krylov steps, 192.7 s at 0.1 mm, 122.4 s at
+0.25 mm (fewer steps, each a few more iterations on the same factorisation)."""
 MAX_CUTS = 6
 MAX_ITER = 40
 CHORD = 0.2
@@ -75,6 +83,17 @@ PASSING_TOL = 1e-5
 """Relative residual of the load steps on the way to a depth asked for (they are only starting
 points: frictionless hyperelastic contact has no memory of its path); the depths asked for are
 solved to `FiniteContact.tol`."""
+KRYLOV_MAX = 12
+"""GMRES iterations of a Newton-Krylov step (3D) before the tangent is factorised instead."""
+KRYLOV_STALE = 8
+"""A Newton-Krylov step that took more GMRES iterations than this has the next tangent factorised
+(the last factorisation has aged: each GMRES iteration costs a solve, a factorisation about 30).
+Measured on the 1 mm monkey, C5 to 0.5 mm in 0.1 mm steps: 33.4, 34.1, 32.9 s at 4, 6, 8, against
+36.8 s refactorising only when GMRES fails and 50.2 s without Newton-Krylov steps."""
+ETA = 1e-2
+"""Forcing term of the Newton-Krylov steps: GMRES stops when the force residual of the linearised
+problem is below ETA times the Newton residual (same run: 36.5 s at 1e-3, 36.8 s at 1e-2, 42.0 s
+at 0.1, where more Newton iterations are needed)."""
 PATIENCE = 6
 """Newton iterations in a row without a new smallest residual after which a step is given up (and
 cut): an active set cycling at the edge of the contact, or a diverging iterate, never recovers."""
@@ -106,6 +125,8 @@ class FiniteContact:
     def __init__(self, model, region: str, held: dict, tol_mm: float = GAP_TOL_MM, tol: float = 1e-8):
         self.model, self.nh, self.tol_mm, self.tol = model, NeoHookean(model), tol_mm, tol
         self._factor = None             # the last tangent's factorisation: its analysis serves the next
+        self._stale = False             # the last Newton-Krylov step found it aged: factorise the next tangent
+        self.krylov = model.dim == 3    # Newton-Krylov steps (module notes)
         self.sn = model.surface_nodes(region)
         self.fixed, values = model.discretisation.constraints(held, model.material.rigid)   # no factorisation
         if np.any(values):
@@ -248,7 +269,7 @@ class FiniteContact:
     def indent_force(self, indentor, force_N: float, max_depth_mm: float, rtol: float = 1e-7,
                      progress=None) -> FiniteResult:
         """The state at which the force along the approach is force_N [N; N/mm in 2D]: depth steps
-        of STEP_MM until the force passes it, then the Illinois variant of regula falsi on the
+        of STEP_MM[dimension] until the force passes it, then the Illinois variant of regula falsi on the
         bracket (superlinear; each trial solved from the bracket's lower state), to rtol.
         InputError when max_depth_mm [mm] does not reach the force."""
         surf = RigidSurface(indentor)
@@ -258,7 +279,7 @@ class FiniteContact:
             if lo[0] >= max_depth_mm - 1e-12:
                 raise InputError(f"indentor {indentor.name}: {force_N:g} N not reached within {max_depth_mm:g} mm "
                                  f"(finite kinematics: {lo[3]:.4g} N there); raise max_depth_mm or lower the force")
-            d = min(lo[0] + STEP_MM, max_depth_mm)
+            d = min(lo[0] + STEP_MM[self.model.dim], max_depth_mm)
             u, lam, _ = self._advance(lo[1], lo[2], surf, t0, lo[0], d)
             hi = (d, u, lam, self._result(u, lam, surf, t0 + d, d, 0).force_N)
             if hi[3] >= force_N:
@@ -286,9 +307,10 @@ class FiniteContact:
 
     def _advance(self, u, lam, surf, t0, depth, target, tol=None):
         """(u, lambda, Newton iterations) at depth `target` from the state (u, lambda) at `depth`,
-        in steps of at most STEP_MM, halved up to MAX_CUTS times when Newton fails. Each step's
-        Newton starts from the last two states' linear extrapolation (when it inverts no element)."""
-        step, cuts, iterations, before = STEP_MM, 0, 0, None
+        in steps of at most STEP_MM[dimension], halved up to MAX_CUTS times when Newton fails. Each
+        step's Newton starts from the last two states' linear extrapolation (when it inverts no element)."""
+        full = STEP_MM[self.model.dim]
+        step, cuts, iterations, before = full, 0, 0, None
         while depth < target - 1e-12:
             trial = min(target, depth + step)
             start = u
@@ -307,7 +329,7 @@ class FiniteContact:
             before = (u, depth)
             u, lam, depth = u_new, lam_new, trial
             iterations += its
-            step = min(STEP_MM, 2 * step)
+            step = min(full, 2 * step)
         return u, lam, iterations
 
     def _result(self, u, lam, surf, travel, depth, iterations) -> FiniteResult:
@@ -330,6 +352,53 @@ class FiniteContact:
         lam = np.linalg.solve(C @ X, -gap - C @ x0) if C.shape[0] else np.zeros(0)
         return x0 + X @ lam, lam
 
+    def _krylov(self, K, G, C, rhs, gap, target):
+        """(du (nf,), lambda (k,), GMRES iterations) solving `_solve`'s system with the current
+        tangent (K with `_bent`'s curvature, G) by GMRES on the last factorisation, or None when the
+        force rows' residual is not below `target` [N] within KRYLOV_MAX iterations. Right-
+        preconditioned by the bordered solve with that older tangent and started from its chord
+        step: that preconditioner meets the constraint rows exactly, so GMRES iterates on the
+        force rows alone (r = rhs - K_T du + C^T lambda)."""
+        F, free, D = self._factor, self.free, self.nh.D
+        whole = np.zeros(self.model.ndof)
+
+        def tangent(x):                          # K_T x on the free DOFs, K_T = K + G^T D^-1 G
+            whole[free] = x
+            return (K @ whole + G.T @ ((G @ whole) / D))[free]
+
+        Y = F(np.column_stack([rhs, C.T.toarray()]), refine=False)
+        X = Y[:, 1:]
+        S = sla.lu_factor(C @ X) if C.shape[0] else None
+
+        def bordered(x, g):                      # (du, lambda) of the old tangent's system, x = K_old^-1 b
+            if S is None:
+                return x, np.zeros(0)
+            lam = sla.lu_solve(S, -g - C @ x)
+            return x + X @ lam, lam
+
+        du, lam = bordered(Y[:, 0], gap)
+        r = rhs - tangent(du) + C.T @ lam
+        beta = float(np.linalg.norm(r))
+        if beta <= target:
+            return du, lam, 0
+        V, Z, H = [r / beta], [], np.zeros((KRYLOV_MAX + 1, KRYLOV_MAX))
+        for j in range(KRYLOV_MAX):              # Arnoldi, modified Gram-Schmidt
+            Z.append(bordered(F(V[j], refine=False), np.zeros(len(gap))))
+            w = tangent(Z[j][0]) - C.T @ Z[j][1]
+            for i in range(j + 1):
+                H[i, j] = w @ V[i]
+                w = w - H[i, j] * V[i]
+            H[j + 1, j] = np.linalg.norm(w)
+            e = np.zeros(j + 2)
+            e[0] = beta
+            y = np.linalg.lstsq(H[:j + 2, :j + 1], e, rcond=None)[0]
+            if np.linalg.norm(e - H[:j + 2, :j + 1] @ y) <= target:
+                return du + sum(c * z[0] for c, z in zip(y, Z)), lam + sum(c * z[1] for c, z in zip(y, Z)), j + 1
+            if H[j + 1, j] == 0:
+                break
+            V.append(w / H[j + 1, j])
+        return None
+
     def _bent(self, K, act, lam, n, curv, straight):
         """K plus the contact curvature -lambda k (I - n n^T - t t^T) on the active nodes' DOF blocks."""
         dim = self.model.dim
@@ -349,7 +418,7 @@ class FiniteContact:
         u, lam = u.copy(), lam.copy()
         g = surf.distance(self._positions(u), travel)[0]
         active = (lam > 0) | (g < -self.tol_mm)
-        last, best, since, chord = math.inf, math.inf, 0, False
+        last, best, since, chord, fresh = math.inf, math.inf, 0, False, False
         for it in range(MAX_ITER):
             g, n, curv, straight = surf.distance(self._positions(u), travel)
             act = np.flatnonzero(active)
@@ -366,22 +435,32 @@ class FiniteContact:
                         and np.all(g[~active] >= -self.tol_mm))
             if it > 0 and feasible and (norm <= tol * scale or floor):
                 return u, np.where(active, lam, 0.0), it
-            # keep the last factorisation while it contracts well, or will reach tol within FINISH more steps
+            # keep the last factorisation while it contracts well, or will reach tol within FINISH more
+            # steps; only its own tangent's (after a Newton-Krylov step it is an older tangent's)
             rate = norm / last if it > 0 and last > 0 else math.inf
-            chord = rate <= CHORD or (rate < 0.5 and rate ** FINISH * norm <= tol * scale)
+            chord = fresh and (rate <= CHORD or (rate < 0.5 and rate ** FINISH * norm <= tol * scale))
             last = norm
             if it > 0:                  # the first residual is the last converged state's
                 best, since = (norm, 0) if norm < best else (best, since + 1)
                 if since >= PATIENCE:
                     raise RuntimeError(f"finite contact: no progress in {PATIENCE} Newton iterations "
                                        f"(residual {norm:.2e}, at best {best:.2e})")
+            solved = None
             if chord:
                 K = G = None
             else:
                 if K is None:
                     _, K, G = self.nh.tangent(u)
                 K = self._bent(K, act, lam, n, curv, straight)
-            du, new_lam = self._solve(K, G, Cf, -f[self.free], g[act])
+                if self.krylov and self._factor is not None and not self._stale:
+                    solved = self._krylov(K, G, Cf, -f[self.free], g[act], ETA * norm)
+                    self._stale = solved is not None and solved[2] > KRYLOV_STALE
+            if solved is None:
+                du, new_lam = self._solve(K, G, Cf, -f[self.free], g[act])
+                self._stale = self._stale and chord
+            else:
+                du, new_lam = solved[:2]
+            fresh = solved is None
             alpha = 1.0
             for _ in range(6):                     # no inverted element
                 trial = u.copy()
