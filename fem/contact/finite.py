@@ -12,15 +12,15 @@ in contact carries a force lambda >= 0 along the normal n; the rest of the surfa
 method is an active set with Lagrange multipliers (a semi-smooth Newton): each iteration solves
 the mixed u-p tangent bordered by the active constraints,
 
-    [ K - sum lambda_i H_i   G^T   -C^T ] [du]   [-(f_int - C^T lambda)]
-    [ G                      -D     0   ] [dp] = [ 0                   ]
-    [-C                       0     0   ] [lam]  [ g_active            ]
+    [ K - sum lambda_i H_i   G^T   -C^T ] [du  ]   [-(f_int - C^T lambda)]
+    [ G                      -D     0   ] [dp  ] = [ 0                   ]
+    [-C                       0     0   ] [dlam]   [ g_active            ]
 
 (C: the active nodes' normals; H_i = k_i (I - n n^T - t t^T), the Hessian of the gap, with k_i
 the curvature of the gap's level set, 1 / |x - c|_perp for a round indentor, 1 / distance from the
 edge around a flat one's edge, the profile's curvature at the closest point for a step, and t
 its straight direction in 3D: a cylinder's axis, the edge's line, the step's length axis; the
-pressure block as in NeoHookean), and then moves the active set: nodes whose multiplier turns
+pressure block as in NeoHookean), takes lambda + dlam as the new multipliers, and moves the active set: nodes whose multiplier turns
 negative leave, nodes that penetrate by more than GAP_TOL_MM join. An iteration whose residual
 fell by CHORD since the last (or, falling at that rate, reaches the tolerance within FINISH more
 iterations) is solved on the last factorisation (a chord step). In 3D, where a factorisation costs
@@ -125,6 +125,7 @@ class FiniteContact:
     def __init__(self, model, region: str, held: dict, tol_mm: float = GAP_TOL_MM, tol: float = 1e-8):
         self.model, self.nh, self.tol_mm, self.tol = model, NeoHookean(model), tol_mm, tol
         self._factor = None             # the last tangent's factorisation: its analysis serves the next
+        self._cols = {}                 # candidate -> its column of K_T^-1 C^T on that factorisation
         self._stale = False             # the last Newton-Krylov step found it aged: factorise the next tangent
         self.krylov = model.dim == 3    # Newton-Krylov steps (module notes)
         self.sn = model.surface_nodes(region)
@@ -339,20 +340,34 @@ class FiniteContact:
         return FiniteResult(float(depth), force, u.copy(), lam.copy(), g, n, self.nh.stored_energy(u),
                             float(max(0.0, -g.min())), float(J.min()), iterations)
 
-    def _solve(self, K, G, C, rhs, gap):
+    def _solve(self, K, G, C, rhs, gap, act):
         """(du (nf,), lambda (k,)) on the free DOFs of [[K_T, -C^T], [-C, 0]] [du, lambda] = [rhs,
         gap], K_T = K + G^T D^-1 G the mixed tangent (`fem.core.linalg.SaddleFactor`, as the linear
-        solver's): du = x0 + X lambda with x0 = K_T^-1 rhs, X = K_T^-1 C^T, and the constraints
-        C du = -gap give (C X) lambda = -gap - C x0 (k x k, dense). K None: the last tangent's
-        factorisation (a chord step)."""
+        solver's): du = x0 + X lambda with x0 = K_T^-1 rhs, X = K_T^-1 C^T (`_columns` of the active
+        candidates act (k,)), and the constraints C du = -gap give (C X) lambda = -gap - C x0 (k x k,
+        dense). K None: the last tangent's factorisation (a chord step)."""
         if K is not None:
             self._factor = SaddleFactor(K, G, self.nh.D, free=self.free, reuse=self._factor)   # the same pattern
-        Y = self._factor(np.column_stack([rhs, C.T.toarray()]), refine=False)     # Newton corrects it
-        x0, X = Y[:, 0], Y[:, 1:]
+            self._cols = {}
+        x0 = self._factor(rhs, refine=False)                                     # Newton corrects it
+        X = self._columns(act, C)
         lam = np.linalg.solve(C @ X, -gap - C @ x0) if C.shape[0] else np.zeros(0)
         return x0 + X @ lam, lam
 
-    def _krylov(self, K, G, C, rhs, gap, target):
+    def _columns(self, act, C) -> np.ndarray:
+        """(nf, k) X = K_T^-1 C^T of the last factorisation for the active candidates act (k,) (C:
+        their rows, on the free DOFs). Each candidate's column is solved once per factorisation,
+        with its normal of then: exact right after the factorisation, and for chord and
+        Newton-Krylov steps a preconditioner that still meets C du = -gap exactly (lambda comes from
+        C X); its error, the normals' turn times lambda, is what the next iteration corrects. (On the
+        1 mm monkey a solve of 200 columns takes 1.4 s, of one 0.04 s.)"""
+        missing = [j for j, i in enumerate(act) if i not in self._cols]
+        if missing:
+            Y = self._factor(C[missing].T.toarray(), refine=False)
+            self._cols.update(zip(act[missing], Y.T))
+        return np.column_stack([self._cols[i] for i in act]) if len(act) else np.zeros((len(self.free), 0))
+
+    def _krylov(self, K, G, C, rhs, gap, act, target):
         """(du (nf,), lambda (k,), GMRES iterations) solving `_solve`'s system with the current
         tangent (K with `_bent`'s curvature, G) by GMRES on the last factorisation, or None when the
         force rows' residual is not below `target` [N] within KRYLOV_MAX iterations. Right-
@@ -366,8 +381,7 @@ class FiniteContact:
             whole[free] = x
             return (K @ whole + G.T @ ((G @ whole) / D))[free]
 
-        Y = F(np.column_stack([rhs, C.T.toarray()]), refine=False)
-        X = Y[:, 1:]
+        X = self._columns(act, C)
         S = sla.lu_factor(C @ X) if C.shape[0] else None
 
         def bordered(x, g):                      # (du, lambda) of the old tangent's system, x = K_old^-1 b
@@ -376,7 +390,7 @@ class FiniteContact:
             lam = sla.lu_solve(S, -g - C @ x)
             return x + X @ lam, lam
 
-        du, lam = bordered(Y[:, 0], gap)
+        du, lam = bordered(F(rhs, refine=False), gap)
         r = rhs - tangent(du) + C.T @ lam
         beta = float(np.linalg.norm(r))
         if beta <= target:
@@ -453,13 +467,14 @@ class FiniteContact:
                     _, K, G = self.nh.tangent(u)
                 K = self._bent(K, act, lam, n, curv, straight)
                 if self.krylov and self._factor is not None and not self._stale:
-                    solved = self._krylov(K, G, Cf, -f[self.free], g[act], ETA * norm)
+                    solved = self._krylov(K, G, Cf, -fr, g[act], act, ETA * norm)
                     self._stale = solved is not None and solved[2] > KRYLOV_STALE
             if solved is None:
-                du, new_lam = self._solve(K, G, Cf, -f[self.free], g[act])
+                du, dlam = self._solve(K, G, Cf, -fr, g[act], act)
                 self._stale = self._stale and chord
             else:
-                du, new_lam = solved[:2]
+                du, dlam = solved[:2]
+            new_lam = lam[act] + dlam           # increments: with approximate columns the fixed point stays exact
             fresh = solved is None
             alpha = 1.0
             for _ in range(6):                     # no inverted element
