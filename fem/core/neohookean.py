@@ -99,6 +99,7 @@ class NeoHookean:
         self.udofs = model.element_dofs.T                                               # (M, nb*d)
         self.mu = model.mu
         self.ndof, self.npres = model.ndof, pb.N
+        self._patterns = None                # `_scatter`
 
     # ------------------------------------------------------------------ kinematics and assembly
     def deformation_gradient(self, u, cells=slice(None)) -> np.ndarray:
@@ -180,20 +181,50 @@ class NeoHookean:
 
     def tangent(self, u):
         """(internal force (ndof,), K (ndof^2) and G (npressure x ndof) sparse): the exact tangent
-        is K + G^T D^-1 G."""
+        is K + G^T D^-1 G. The element matrices are summed into the fixed CSR patterns of K and G
+        (`_scatter`, built on the first call)."""
         p_nodes = self.pressure(u)
-        f, K, G = np.zeros(self.ndof), None, None
-        for c in self._chunks():
+        (kp, kpos), (gp, gpos) = self._scatter()
+        f, kd, gd = np.zeros(self.ndof), np.zeros(len(kp.indices)), np.zeros(len(gp.indices))
+        for c, ki, gi in zip(self._chunks(), kpos, gpos):
             r, k, g = self._local(u, p_nodes, c, True)
             f += np.bincount(self.udofs[c].ravel(), r.ravel(), minlength=self.ndof)
-            dofs, pd = self.udofs[c], self.pdofs[c]
-            n, nc = dofs.shape[1], pd.shape[1]
-            Kc = sp.csr_matrix((k.ravel(), (np.repeat(dofs, n, axis=1).ravel(), np.tile(dofs, (1, n)).ravel())),
-                               shape=(self.ndof,) * 2)
-            Gc = sp.csr_matrix((g.ravel(), (np.repeat(pd, n, axis=1).ravel(), np.tile(dofs, (1, nc)).ravel())),
-                               shape=(self.npres, self.ndof))
-            K, G = (Kc, Gc) if K is None else (K + Kc, G + Gc)
-        return f, K, G
+            kd += np.bincount(ki, k.ravel(), minlength=len(kd))
+            gd += np.bincount(gi, g.ravel(), minlength=len(gd))
+        return (f, sp.csr_matrix((kd, kp.indices, kp.indptr), shape=kp.shape),
+                sp.csr_matrix((gd, gp.indices, gp.indptr), shape=gp.shape))
+
+    def _scatter(self):
+        """((K's CSR pattern, per chunk the position in its data of each element entry, (m nb d nb d,)),
+        the same for G (m nc nb d,)), built once. The DOFs are node-major (dof = d node + component,
+        as the element DOFs), so the patterns follow from the node pairs (nb^2 per element instead
+        of (nb d)^2): the row of a node a (K: d rows a, i; G: one, a pressure node) holds, for each
+        node b coupled to it in increasing order, the columns d b ... d b + d - 1. (Measured on the
+        1 mm monkey: a tangent in 0.30 s instead of 0.54 s summing per-chunk sparse matrices; the
+        patterns 1.2 s once.)"""
+        if self._patterns is None:
+            d, nb, n_nodes = self.dim, self.udofs.shape[1] // self.dim, self.ndof // self.dim
+            nodes = self.udofs[:, ::d] // d                                                    # (M, nb)
+            if not np.array_equal(self.udofs.reshape(len(nodes), nb, d), d * nodes[..., None] + np.arange(d)):
+                raise AssertionError("element DOFs are not node-major")
+            out = []
+            for rows, size, r in ((nodes, n_nodes, d), (self.pdofs, self.npres, 1)):
+                keys = np.repeat(rows, nb, axis=1) * np.int64(n_nodes) + np.tile(nodes, (1, rows.shape[1]))
+                pairs = np.unique(keys)
+                a = pairs // n_nodes
+                ptr = np.searchsorted(a, np.arange(size + 1))                      # node-pair CSR
+                start = d * (r * ptr[:-1, None] + np.diff(ptr)[:, None] * np.arange(r))   # (size, r): row (a, i)
+                cols = np.empty(d * r * len(pairs), dtype=np.int32)
+                cols[start[a][:, :, None] + d * (np.arange(len(pairs)) - ptr[a])[:, None, None] + np.arange(d)] = \
+                    (d * (pairs % n_nodes))[:, None, None] + np.arange(d)
+                q = np.searchsorted(pairs, keys).reshape(len(nodes), rows.shape[1], nb)
+                pos = (start[rows][:, :, :, None, None] + d * (q - ptr[rows][..., None])[:, :, None, :, None]
+                       + np.arange(d)).reshape(len(nodes), -1).astype(np.int32)       # (M, rows r nb d)
+                csr = sp.csr_matrix((np.zeros(len(cols)), cols, np.append(start.ravel(), d * r * ptr[-1])),
+                                    shape=(size * r, self.ndof))
+                out.append((csr, [pos[c].ravel() for c in self._chunks()]))
+            self._patterns = tuple(out)
+        return self._patterns
 
     # ------------------------------------------------------------------ Newton with load stepping
     def solve(self, prescribed, steps: int = 4, tol: float = 1e-10, max_iter: int = 25,
