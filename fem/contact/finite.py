@@ -87,13 +87,14 @@ KRYLOV_MAX = 12
 """GMRES iterations of a Newton-Krylov step (3D) before the tangent is factorised instead."""
 KRYLOV_STALE = 8
 """A Newton-Krylov step that took more GMRES iterations than this has the next tangent factorised
-(the last factorisation has aged: each GMRES iteration costs a solve, a factorisation about 30).
-Measured on the 1 mm monkey, C5 to 0.5 mm in 0.1 mm steps: 33.4, 34.1, 32.9 s at 4, 6, 8, against
-36.8 s refactorising only when GMRES fails and 50.2 s without Newton-Krylov steps."""
-ETA = 1e-2
+(the last factorisation has aged: each GMRES iteration costs a solve, a factorisation with its
+columns about 50 on the 1 mm monkey). Measured with ETA (see there): 70.1 s at 6, 68.2 s at 8."""
+ETA = 3e-2
 """Forcing term of the Newton-Krylov steps: GMRES stops when the force residual of the linearised
-problem is below ETA times the Newton residual (same run: 36.5 s at 1e-3, 36.8 s at 1e-2, 42.0 s
-at 0.1, where more Newton iterations are needed)."""
+problem is below ETA times the Newton residual. Measured on the 1 mm monkey, C5 perpendicular
+0.5:2:0.5 mm in process (forces within 4e-10 of each other): 74.1 s at 1e-2, 68.2 s at 3e-2,
+69.8 s at 5e-2; at 3e-2 with KRYLOV_STALE 6 70.1 s; at 1e-2 with KRYLOV_STALE 11 (KRYLOV_MAX
+16) 76.2 s."""
 PATIENCE = 6
 """Newton iterations in a row without a new smallest residual after which a step is given up (and
 cut): an active set cycling at the edge of the contact, or a diverging iterate, never recovers."""
