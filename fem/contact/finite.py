@@ -95,6 +95,10 @@ problem is below ETA times the Newton residual. Measured on the 1 mm monkey, C5 
 0.5:2:0.5 mm in process (forces within 4e-10 of each other): 74.1 s at 1e-2, 68.2 s at 3e-2,
 69.8 s at 5e-2; at 3e-2 with KRYLOV_STALE 6 70.1 s; at 1e-2 with KRYLOV_STALE 11 (KRYLOV_MAX
 16) 76.2 s."""
+COLUMNS_MAX_BYTES = 2**30
+"""Memory for the kept columns of `FiniteContact._columns` (float64): beyond it they are all solved
+again for the current active set (the 1 mm monkey holds 1,900 columns of 70k unknowns in it, the
+human 0.5 mm model 430 of 311k)."""
 PATIENCE = 6
 """Newton iterations in a row without a new smallest residual after which a step is given up (and
 cut): an active set cycling at the edge of the contact, or a diverging iterate, never recovers."""
@@ -361,8 +365,11 @@ class FiniteContact:
         with its normal of then: exact right after the factorisation, and for chord and
         Newton-Krylov steps a preconditioner that still meets C du = -gap exactly (lambda comes from
         C X); its error, the normals' turn times lambda, is what the next iteration corrects. (On the
-        1 mm monkey a solve of 200 columns takes 1.4 s, of one 0.04 s.)"""
+        1 mm monkey a solve of 200 columns takes 1.4 s, of one 0.04 s.) At most COLUMNS_MAX_BYTES
+        are kept."""
         missing = [j for j, i in enumerate(act) if i not in self._cols]
+        if (len(self._cols) + len(missing)) * len(self.free) * 8 > COLUMNS_MAX_BYTES:
+            self._cols, missing = {}, list(range(len(act)))          # start over: only these columns
         if missing:
             Y = self._factor(C[missing].T.toarray(), refine=False)
             self._cols.update(zip(act[missing], Y.T))
