@@ -20,13 +20,14 @@ the mixed u-p tangent bordered by the active constraints,
 the curvature of the gap's level set, 1 / |x - c|_perp for a round indentor, 1 / distance from the
 edge around a flat one's edge, the profile's curvature at the closest point for a step, and t
 its straight direction in 3D: a cylinder's axis, the edge's line, the step's length axis; the
-pressure block as in NeoHookean), takes lambda + dlam as the new multipliers, and moves the active set: nodes whose multiplier turns
-negative leave, nodes that penetrate by more than GAP_TOL_MM join. An iteration whose residual
-fell by CHORD since the last (or, falling at that rate, reaches the tolerance within FINISH more
-iterations) is solved on the last factorisation (a chord step). In 3D, where a factorisation costs
-about 30 solves, any other iteration is first solved with its own tangent by GMRES on the last
-factorisation (`_krylov`, a Newton-Krylov step), and factorises only when that does not reach
-ETA of the residual within KRYLOV_MAX iterations. It stops when the active set
+pressure block as in NeoHookean), takes lambda + dlam as the new multipliers, and moves the
+active set: nodes whose multiplier turns negative leave, nodes that penetrate by more than
+GAP_TOL_MM join. An iteration whose residual fell by CHORD since the last (or, falling at that
+rate, reaches the tolerance within FINISH more iterations) is solved on the last factorisation
+(a chord step). In 3D, where a factorisation costs about 60 solves (the 1 mm monkey), any other
+iteration is first solved with its own tangent by GMRES on the last factorisation (`_krylov`, a
+Newton-Krylov step), and factorises only when that does not reach ETA of the residual within
+KRYLOV_MAX iterations. It stops when the active set
 is stable, the free residual is below `tol` of the contact force (1e-8: the solves skip iterative
 refinement, so the last iterations converge linearly, and each further digit of the residual costs
 about one more tangent while the force is settled to 9-10 digits) and every gap is within GAP_TOL_MM,
