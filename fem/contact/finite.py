@@ -97,9 +97,9 @@ problem is below ETA times the Newton residual. Measured on the 1 mm monkey, C5 
 69.8 s at 5e-2; at 3e-2 with KRYLOV_STALE 6 70.1 s; at 1e-2 with KRYLOV_STALE 11 (KRYLOV_MAX
 16) 76.2 s."""
 COLUMNS_MAX_BYTES = 2**30
-"""Memory for the kept columns of `FiniteContact._columns` (float64): beyond it they are all solved
-again for the current active set (the 1 mm monkey holds 1,900 columns of 70k unknowns in it, the
-human 0.5 mm model 430 of 311k)."""
+"""Memory for the kept columns of `FiniteContact._columns` (float64): beyond it none is kept and
+every iteration solves its active set's columns afresh, holding them once (the 1 mm monkey keeps
+up to 1,900 columns of 70k unknowns, the human 0.5 mm model 430 of 311k)."""
 PATIENCE = 6
 """Newton iterations in a row without a new smallest residual after which a step is given up (and
 cut): an active set cycling at the edge of the contact, or a diverging iterate, never recovers."""
@@ -370,7 +370,8 @@ class FiniteContact:
         are kept."""
         missing = [j for j, i in enumerate(act) if i not in self._cols]
         if (len(self._cols) + len(missing)) * len(self.free) * 8 > COLUMNS_MAX_BYTES:
-            self._cols, missing = {}, list(range(len(act)))          # start over: only these columns
+            self._cols = {}                      # none kept: X solved afresh, held once
+            return self._factor(C.T.toarray(), refine=False) if len(act) else np.zeros((len(self.free), 0))
         if missing:
             Y = self._factor(C[missing].T.toarray(), refine=False)
             self._cols.update(zip(act[missing], Y.T))
