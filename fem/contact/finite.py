@@ -96,10 +96,16 @@ problem is below ETA times the Newton residual. Measured on the 1 mm monkey, C5 
 0.5:2:0.5 mm in process (forces within 4e-10 of each other): 74.1 s at 1e-2, 68.2 s at 3e-2,
 69.8 s at 5e-2; at 3e-2 with KRYLOV_STALE 6 70.1 s; at 1e-2 with KRYLOV_STALE 11 (KRYLOV_MAX
 16) 76.2 s."""
-COLUMNS_MAX_BYTES = 2**30
+COLUMNS_MAX_BYTES = 2**28
 """Memory for the kept columns of `FiniteContact._columns` (float64): beyond it none is kept and
 every iteration solves its active set's columns afresh, holding them once (the 1 mm monkey keeps
-up to 1,900 columns of 70k unknowns, the human 0.5 mm model 430 of 311k)."""
+up to 470 columns of 70k unknowns, the human 0.5 mm model 107 of 311k). With 1 GiB the human
+model's acceptance run held up to 9.9 GB against 7-8.7 GB before columns were kept."""
+COLUMN_BLOCK = 256
+"""Columns of `FiniteContact._columns` per solve: a solve holds its right-hand sides three times
+over (dense, padded for PARDISO, solution), 1.9 GB for 256 on the human 0.5 mm model, where its
+acceptance run held up to 14.8 GB solving all active columns at once. (1 mm monkey, C5
+perpendicular 0.5:2:0.5 mm in process: 70.8 s at 256, 72.2 s at 64, 68.2 s in one solve.)"""
 PATIENCE = 6
 """Newton iterations in a row without a new smallest residual after which a step is given up (and
 cut): an active set cycling at the edge of the contact, or a diverging iterate, never recovers."""
@@ -371,10 +377,13 @@ class FiniteContact:
         missing = [j for j, i in enumerate(act) if i not in self._cols]
         if (len(self._cols) + len(missing)) * len(self.free) * 8 > COLUMNS_MAX_BYTES:
             self._cols = {}                      # none kept: X solved afresh, held once
-            return self._factor(C.T.toarray(), refine=False) if len(act) else np.zeros((len(self.free), 0))
-        if missing:
-            Y = self._factor(C[missing].T.toarray(), refine=False)
-            self._cols.update(zip(act[missing], Y.T))
+            X = np.empty((len(self.free), len(act)))
+            for b in range(0, len(act), COLUMN_BLOCK):
+                X[:, b:b + COLUMN_BLOCK] = self._factor(C[b:b + COLUMN_BLOCK].T.toarray(), refine=False)
+            return X
+        for b in range(0, len(missing), COLUMN_BLOCK):
+            block = missing[b:b + COLUMN_BLOCK]
+            self._cols.update(zip(act[block], self._factor(C[block].T.toarray(), refine=False).T.copy()))
         return np.column_stack([self._cols[i] for i in act]) if len(act) else np.zeros((len(self.free), 0))
 
     def _krylov(self, K, G, C, rhs, gap, act, target):

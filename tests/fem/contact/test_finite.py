@@ -414,6 +414,7 @@ def test_newton_krylov_steps_give_the_factorised_answer_with_fewer_factorisation
     runs, factorisations = {}, {}
     for krylov, budget in ((False, finite.COLUMNS_MAX_BYTES), (True, 0), (True, finite.COLUMNS_MAX_BYTES)):
         monkeypatch.setattr(finite, "COLUMNS_MAX_BYTES", budget)     # 0: no column kept between iterations
+        monkeypatch.setattr(finite, "COLUMN_BLOCK", 3 if krylov else 64)   # several blocks per solve
         fc = FiniteContact(model, "top", held)
         fc.krylov = krylov
         made.clear()
