@@ -141,3 +141,15 @@ def headless_chromium():
         opts.add_argument(flag)
     return webdriver.Chrome(service=Service(str(CHROMEDRIVER)), options=opts)
 
+
+def quarter_block(nu, fine_mm, size_mm, E_MPa=1.0):
+    """(Model, held regions): a quarter of an elastic block (x, z >= 0 symmetry planes, y <= 0,
+    the bottom held), P2, fine_mm under the origin, size_mm across."""
+    from fem.core.model import Model
+    from fem.verify.closed_forms import box, fine_then_growing
+
+    xs = fine_then_growing(fine_mm, 1.0, 1.6, size_mm)
+    p, cells, r = box(xs, -fine_then_growing(fine_mm, 0.75, 1.5, size_mm)[::-1], xs)
+    regions = {"top": r["ymax"], "bottom": r["ymin"], "symx": r["xmin"], "symz": r["zmin"]}
+    return (Model(p, cells, np.ones(len(cells), int), regions, material=[E_MPa], nu=nu),
+            {"bottom": 0.0, "symx": (0.0, None, None), "symz": (None, None, 0.0)})

@@ -9,6 +9,7 @@ from fem.contact.indentors import make_indentor
 from fem.contact.linear import ContactModel
 from fem.core.model import Model
 from fem.verify.closed_forms import box, fine_then_growing, hertz_cylinder, hertz_sphere
+from tests.helpers import quarter_block
 
 
 def half_plane(nu, fine_mm=0.02, size_mm=40.0):
@@ -72,8 +73,7 @@ def test_condensed_compliance_equals_lazy_columns(dim, incline):
         model, _ = half_plane(0.48, fine_mm=0.05, size_mm=20.0)
         prescribed, ind = {"bottom": 0.0, "sym": (0.0, None)}, make_indentor("C2", orientation="parallel")
     elif incline == 0:
-        model, _ = quarter_block(0.48, 0.25, 4.0)
-        prescribed = {"bottom": 0.0, "symx": (0.0, None, None), "symz": (None, None, 0.0)}
+        model, prescribed = quarter_block(0.48, 0.25, 4.0)
         ind = make_indentor("sphere:5")
     else:            # no symmetry planes: rotated DOFs need nodes held in all or no directions
         xs = fine_then_growing(0.3, 0.6, 1.6, 3.0)
@@ -119,15 +119,6 @@ def test_receptor_grid_measures_match_solver_sampling():
     assert got["sed_MPa"].max() > 0
 
 
-def quarter_block(nu, fine_mm, size_mm):
-    """Quarter of an elastic block (x, z >= 0 symmetric, y <= 0, bottom fixed), E = 1 MPa, P2."""
-    xs = fine_then_growing(fine_mm, 1.0, 1.6, size_mm)
-    p, cells, r = box(xs, -fine_then_growing(fine_mm, 0.75, 1.5, size_mm)[::-1], xs)
-    regions = {"top": r["ymax"], "bottom": r["ymin"], "symx": r["xmin"], "symz": r["zmin"]}
-    model = Model(p, cells, np.ones(len(cells), int), regions, material=[1.0], nu=nu)
-    return model, model.system({"bottom": 0.0, "symx": (0.0, None, None), "symz": (None, None, 0.0)})
-
-
 def test_hertz_sphere_on_quarter_block():
     """Rigid sphere R = 5 mm, 0.1 mm deep, nu = 0.49, on an 8 mm quarter block (P2, 0.125 mm under
     the contact): 3D P2 facets, symmetry planes. Contact radius and peak pressure against Hertz at
@@ -136,7 +127,8 @@ def test_hertz_sphere_on_quarter_block():
     than a half-space; on a 40 mm block the force is within 0.6 % of Hertz
     (`benchmarks/contact_bench.py hertz`, docs/verification.md)."""
     nu = 0.49
-    model, system = quarter_block(nu, 0.125, 8.0)
+    model, held = quarter_block(nu, 0.125, 8.0)
+    system = model.system(held)
     cm = ContactModel.from_fe(model, system, "top")
     res = cm.indent(make_indentor("sphere:5"), depth_mm=0.1)
     F = 4 * res.total_force_N                                       # quarter model
@@ -160,8 +152,7 @@ def test_condensing_only_the_reach_gives_the_full_answer(dim):
         model, _ = half_plane(0.48, fine_mm=0.05, size_mm=20.0)
         prescribed, ind = {"bottom": 0.0, "sym": (0.0, None)}, make_indentor("C2", orientation="parallel")
     else:
-        model, _ = quarter_block(0.48, 0.25, 4.0)
-        prescribed = {"bottom": 0.0, "symx": (0.0, None, None), "symz": (None, None, 0.0)}
+        model, prescribed = quarter_block(0.48, 0.25, 4.0)
         ind = make_indentor("sphere:5")
     sn = model.surface_nodes("top")
     depths = [0.1, 0.2, 0.3]

@@ -25,7 +25,7 @@ from fem.io.runfolder import stored_energy_Nmm
 from fem.receptors.grid import ReceptorSampler, receptor_grid
 from fem.verify.energy import indentation_work_Nmm
 from fingertip.errors import InputError
-from tests.helpers import csv_rows
+from tests.helpers import csv_rows, quarter_block
 
 DEPTHS_MM = np.linspace(0.0, 0.4, 9)[1:]
 
@@ -386,7 +386,7 @@ def test_newton_krylov_steps_give_the_factorised_answer_with_fewer_factorisation
     """3D Newton-Krylov steps (GMRES on the last factorisation, `FiniteContact._krylov`): a 2 mm
     sphere 0.25 and 0.5 mm into a soft quarter block (0.4 mm P2 under it) gives the forces and stored
     energies of Newton with a factorisation in every non-chord iteration within 1e-7 (both solve to
-    a relative residual of 1e-8; measured within 7e-10), with fewer factorisations (measured 1
+    a relative residual of 1e-8; measured within 1.1e-9), with fewer factorisations (measured 1
     against 6), and so with no column of K_T^-1 C^T kept between iterations. One such step at the
     last state, with the sphere 0.05 mm further and GMRES driven to 1e-7 of the right-hand side,
     solves the bordered system of that state's tangent: its direct solve on its own factorisation
@@ -394,14 +394,7 @@ def test_newton_krylov_steps_give_the_factorised_answer_with_fewer_factorisation
     import scipy.sparse as sp
 
     import fem.contact.finite as finite
-    from fem.core.model import Model
-    from fem.verify.closed_forms import box, fine_then_growing
-
-    xs = fine_then_growing(0.4, 1.5, 1.5, 4.0)
-    p, cells, reg = box(xs, -fine_then_growing(0.4, 1.5, 1.5, 4.0)[::-1], xs)
-    model = Model(p, cells, np.ones(len(cells), int), {"top": reg["ymax"], "bottom": reg["ymin"], "symx": reg["xmin"],
-                                                      "symz": reg["zmin"]}, material=[0.01], nu=0.48)
-    held = {"bottom": 0.0, "symx": (0.0, None, None), "symz": (None, None, 0.0)}
+    model, held = quarter_block(0.48, 0.4, 4.0, E_MPa=0.01)
     ind = make_indentor("sphere:2")
     made = []
 
@@ -438,7 +431,7 @@ def test_newton_krylov_steps_give_the_factorised_answer_with_fewer_factorisation
     C = sp.csr_matrix((n[act].ravel(), (np.repeat(np.arange(len(act)), 3), fc.dofs[act].ravel())),
                       shape=(len(act), model.ndof))[:, fc.free]
     rhs = -f[fc.free]
-    monkeypatch.setattr(finite, "KRYLOV_MAX", 30)     # an aged factorisation: 21 iterations measured
+    monkeypatch.setattr(finite, "KRYLOV_MAX", 30)     # an aged factorisation: 20 iterations measured
     du, lam, its = fc._krylov(K, G, C, rhs, g[act], act, 1e-7 * np.linalg.norm(rhs))
     assert its > 0
     direct_du, direct_lam = fc._solve(K, G, C, rhs, g[act], act)
