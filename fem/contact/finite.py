@@ -55,7 +55,7 @@ import scipy.sparse as sp
 from fem.contact.facets import edge_area_mm2, fe_facets, node_pairs, smoothed_pressure
 from fem.contact.linear import GAP_TOL_MM, ContactResult, kkt_record
 from fem.contact.surfaces import RigidSurface
-from fem.core.linalg import SaddleFactor
+from fem.core.linalg import SaddleFactor, serial_openblas
 from fem.core.measures import State, evaluate
 from fem.core.neohookean import NeoHookean
 from fingertip.errors import InputError
@@ -331,8 +331,9 @@ class FiniteContact:
                 guess = u + (u - before[0]) * ((trial - depth) / (depth - before[1]))
                 start = guess if self.nh.jacobian(guess).min() > 0 else u
             try:
-                u_new, lam_new, its = self._newton(start, lam, surf, t0 + trial,
-                                                   tol if trial >= target - 1e-12 else PASSING_TOL)
+                with serial_openblas():          # NumPy work between PARDISO solves
+                    u_new, lam_new, its = self._newton(start, lam, surf, t0 + trial,
+                                                       tol if trial >= target - 1e-12 else PASSING_TOL)
             except (FloatingPointError, RuntimeError) as exc:
                 cuts += 1
                 step /= 2

@@ -149,13 +149,17 @@ class NeoHookean:
             return np.matmul((A * weight[..., None]).transpose(0, 2, 1), B)
 
         cw, pw = c * w, p * J * w
-        S = quad(cw.repeat(d, axis=1), grad.transpose(0, 1, 3, 2).reshape(M, -1, nb),
-                 grad.transpose(0, 1, 3, 2).reshape(M, -1, nb))                               # (M, nb, nb)
-        XY = quad(cw, X, Y)
-        k = (S[:, :, None, :, None] * np.eye(d)[None, None, :, None, :]).reshape(M, nb * d, nb * d)
-        k -= (2.0 / d) * (XY + XY.transpose(0, 2, 1))
-        k += quad(cw * 2.0 * I1 / d**2 + pw, Y, Y)
-        k += quad(cw * I1 / d - pw, Y, Y).reshape(M, nb, d, nb, d).transpose(0, 1, 4, 3, 2).reshape(M, nb * d, nb * d)
+        # the rank-one terms in one product, -(2/d) cw (X Y^T + Y X^T) + (2 cw I1 / d^2 + pw) Y Y^T, then
+        # two passes in place: mu J^(-2/d) grad phi_a . grad phi_b on each component, and the
+        # component-swapped term ((a, i), (b, j)) <- ((a, j), (b, i))
+        k = quad(np.concatenate([(-2.0 / d) * cw, (-2.0 / d) * cw, cw * 2.0 * I1 / d**2 + pw], axis=1),
+                 np.concatenate([X, Y, Y], axis=1), np.concatenate([Y, X, Y], axis=1))
+        k5 = k.reshape(M, nb, d, nb, d)
+        gq = grad.transpose(0, 1, 3, 2).reshape(M, -1, nb)                                     # (M, nq d, nb)
+        S = quad(cw.repeat(d, axis=1), gq, gq)                                                 # (M, nb, nb)
+        for i in range(d):
+            k5[:, :, i, :, i] += S
+        k5 += quad(cw * I1 / d - pw, Y, Y).reshape(M, nb, d, nb, d).transpose(0, 1, 4, 3, 2)
         G = quad(J * w, self.q[cells], Y)                                                     # (M, nc, nb*d)
         return r, k, G
 

@@ -202,6 +202,27 @@ def test_blas_limit_reaches_pardiso_loaded_after_a_first_limit():
     assert out == "1 [1]"
 
 
+def test_serial_openblas_limits_openblas_and_leaves_mkl():
+    """Inside `serial_openblas` every OpenBLAS runs on one thread (its spinning threads doubled the
+    finite solver's PARDISO solves) while MKL, PARDISO's, keeps its thread count; both are as before
+    afterwards."""
+    from fem.core.linalg import _thread_controller, load_mkl, serial_openblas
+
+    load_mkl()
+
+    def threads():
+        return sorted((i["internal_api"], i["filepath"], i["num_threads"]) for i in _thread_controller().info())
+
+    before = threads()
+    if not any(api == "openblas" for api, _, _ in before):
+        pytest.skip("NumPy and SciPy use no OpenBLAS here")
+    with serial_openblas():
+        inside = threads()
+    assert [n for api, _, n in inside if api == "openblas"] == [1] * sum(api == "openblas" for api, _, _ in before)
+    assert [t for t in inside if t[0] != "openblas"] == [t for t in before if t[0] != "openblas"]
+    assert threads() == before
+
+
 def test_drop_round_off_leaves_a_pattern_free_of_summation_order():
     """Entries at round-off of the diagonal scale (and explicit zeros) go, the diagonal and every
     entry above the threshold stay: two matrices that differ only by round-off-sized entries get
