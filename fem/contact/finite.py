@@ -97,15 +97,21 @@ problem is below ETA times the Newton residual. Measured on the 1 mm monkey, C5 
 69.8 s at 5e-2; at 3e-2 with KRYLOV_STALE 6 70.1 s; at 1e-2 with KRYLOV_STALE 11 (KRYLOV_MAX
 16) 76.2 s."""
 COLUMNS_MAX_BYTES = 2**28
-"""Memory for the kept columns of `FiniteContact._columns` (float64): beyond it none is kept and
-every iteration solves its active set's columns afresh, holding them once (the 1 mm monkey keeps
-up to 470 columns of 70k unknowns, the human 0.5 mm model 107 of 311k). With 1 GiB the human
-model's acceptance run held up to 9.9 GB against 7-8.7 GB before columns were kept."""
+"""Memory for the kept columns of `FiniteContact._columns` (float64). While the active candidates'
+whole columns fit, they are kept (the 1 mm monkey: up to 470 of its 70k unknowns); beyond it only
+their rows at the candidates' DOFs are kept (`_Border`: the human 0.5 mm model, 20,739 rows
+instead of 311k; its acceptance run held up to 9.9 GB keeping whole columns within 1 GiB), and
+X lambda is one more solve; beyond it in rows too, none is kept and every iteration solves its
+active set's columns afresh."""
 COLUMN_BLOCK = 256
-"""Columns of `FiniteContact._columns` per solve: a solve holds its right-hand sides three times
-over (dense, padded for PARDISO, solution), 1.9 GB for 256 on the human 0.5 mm model, where its
-acceptance run held up to 14.8 GB solving all active columns at once. (1 mm monkey, C5
-perpendicular 0.5:2:0.5 mm in process: 70.8 s at 256, 72.2 s at 64, 68.2 s in one solve.)"""
+"""Columns of `FiniteContact._columns` per solve, at most; fewer where their right-hand sides
+would take more than COLUMN_BLOCK_BYTES. (1 mm monkey, C5 perpendicular 0.5:2:0.5 mm in process:
+70.8 s at 256, 72.2 s at 64, 68.2 s in one solve.)"""
+COLUMN_BLOCK_BYTES = 2**28
+"""A solve holds its right-hand sides three times over (dense, padded for PARDISO, solution): 256
+columns of the human 0.5 mm model are 0.64 GB each time, and its acceptance run held up to 14.8 GB
+solving all active columns at once. So a block holds at most this (107 columns there, 256 on the
+1 mm monkey)."""
 PATIENCE = 6
 """Newton iterations in a row without a new smallest residual after which a step is given up (and
 cut): an active set cycling at the edge of the contact, or a diverging iterate, never recovers."""
@@ -129,6 +135,21 @@ class FiniteResult:
     iterations: int
 
 
+class _Border:
+    """The active constraints' columns X = K_T^-1 C^T (nf, k) on one factorisation, as a bordered
+    solve uses them: CX = C X (k, k), and X lambda (`times`) from the columns X when they are kept
+    whole, else as one more solve, K_T^-1 (C^T lambda), on the factorisation `factor`."""
+
+    def __init__(self, CX, X=None, factor=None, C=None):
+        self.CX, self._X, self._factor, self._C = CX, X, factor, C
+
+    def times(self, lam) -> np.ndarray:
+        """(nf,) X lambda for lambda (k,)."""
+        if self._X is not None:
+            return self._X @ lam
+        return self._factor(self._C.T @ lam, refine=False)
+
+
 class FiniteContact:
     """Frictionless contact of a model's neo-Hookean body (`fem.core.model.Model`, 2D or 3D) on the
     candidate nodes of `region` with a rigid indentor; held: the regions held fixed (as
@@ -137,7 +158,8 @@ class FiniteContact:
     def __init__(self, model, region: str, held: dict, tol_mm: float = GAP_TOL_MM, tol: float = 1e-8):
         self.model, self.nh, self.tol_mm, self.tol = model, NeoHookean(model), tol_mm, tol
         self._factor = None             # the last tangent's factorisation: its analysis serves the next
-        self._cols = {}                 # candidate -> its column of K_T^-1 C^T on that factorisation
+        self._cols = {}                 # candidate -> its column of K_T^-1 C^T on that factorisation (or its rows)
+        self._whole = True              # whether _cols holds whole columns (else their rows at `_at`)
         self._stale = False             # the last Newton-Krylov step found it aged: factorise the next tangent
         self.krylov = model.dim == 3    # Newton-Krylov steps (module notes)
         self.sn = model.surface_nodes(region)
@@ -148,6 +170,7 @@ class FiniteContact:
         self.free = np.setdiff1d(np.arange(model.ndof), self.fixed)
         self.stopped = None                # why the last `indent` ended early (partial=True)
         self.dofs = self.sn.dofs                                   # (m, dim)
+        self._at = np.flatnonzero(np.isin(self.free, self.dofs))  # the candidates' DOFs among the free ones
         self.X = np.zeros((len(self.dofs), 3))
         self.X[:, :model.dim] = self.sn.x
         self.facets = fe_facets(model, region, self.sn)
@@ -361,31 +384,36 @@ class FiniteContact:
         dense). K None: the last tangent's factorisation (a chord step)."""
         if K is not None:
             self._factor = SaddleFactor(K, G, self.nh.D, free=self.free, reuse=self._factor)   # the same pattern
-            self._cols = {}
+            self._cols, self._whole = {}, True
         x0 = self._factor(rhs, refine=False)                                     # Newton corrects it
         X = self._columns(act, C)
-        lam = np.linalg.solve(C @ X, -gap - C @ x0) if C.shape[0] else np.zeros(0)
-        return x0 + X @ lam, lam
+        lam = np.linalg.solve(X.CX, -gap - C @ x0) if C.shape[0] else np.zeros(0)
+        return x0 + X.times(lam), lam
 
-    def _columns(self, act, C) -> np.ndarray:
-        """(nf, k) X = K_T^-1 C^T of the last factorisation for the active candidates act (k,) (C:
-        their rows, on the free DOFs). Each candidate's column is solved once per factorisation,
+    def _columns(self, act, C) -> _Border:
+        """X = K_T^-1 C^T of the last factorisation for the active candidates act (k,) (C: their rows,
+        on the free DOFs), as `_Border`. Each candidate's column is solved once per factorisation,
         with its normal of then: exact right after the factorisation, and for chord and
         Newton-Krylov steps a preconditioner that still meets C du = -gap exactly (lambda comes from
         C X); its error, the normals' turn times lambda, is what the next iteration corrects. (On the
-        1 mm monkey a solve of 200 columns takes 1.4 s, of one 0.04 s.) At most COLUMNS_MAX_BYTES
-        are kept."""
+        1 mm monkey a solve of 200 columns takes 1.4 s, of one 0.04 s.) Kept within
+        COLUMNS_MAX_BYTES: whole columns while they fit, else their rows at the candidates' DOFs."""
         missing = [j for j, i in enumerate(act) if i not in self._cols]
-        if (len(self._cols) + len(missing)) * len(self.free) * 8 > COLUMNS_MAX_BYTES:
-            self._cols = {}                      # none kept: X solved afresh, held once
-            X = np.empty((len(self.free), len(act)))
-            for b in range(0, len(act), COLUMN_BLOCK):
-                X[:, b:b + COLUMN_BLOCK] = self._factor(C[b:b + COLUMN_BLOCK].T.toarray(), refine=False)
-            return X
-        for b in range(0, len(missing), COLUMN_BLOCK):
-            block = missing[b:b + COLUMN_BLOCK]
-            self._cols.update(zip(act[block], self._factor(C[block].T.toarray(), refine=False).T.copy()))
-        return np.column_stack([self._cols[i] for i in act]) if len(act) else np.zeros((len(self.free), 0))
+        if self._whole and (len(self._cols) + len(missing)) * len(self.free) * 8 > COLUMNS_MAX_BYTES:
+            self._whole = False                  # rows from here on, for this factorisation
+            self._cols = {i: x[self._at] for i, x in self._cols.items()}
+        if not self._whole and (len(self._cols) + len(missing)) * len(self._at) * 8 > COLUMNS_MAX_BYTES:
+            self._cols, missing = {}, list(range(len(act)))      # none kept: solved afresh
+        size = max(1, min(COLUMN_BLOCK, COLUMN_BLOCK_BYTES // (8 * len(self.free))))
+        for b in range(0, len(missing), size):
+            block = missing[b:b + size]
+            x = self._factor(C[block].T.toarray(), refine=False)
+            self._cols.update(zip(act[block], (x if self._whole else x[self._at]).T.copy()))
+        if self._whole:
+            X = np.column_stack([self._cols[i] for i in act]) if len(act) else np.zeros((len(self.free), 0))
+            return _Border(C @ X, X)
+        rows = np.column_stack([self._cols[i] for i in act]) if len(act) else np.zeros((len(self._at), 0))
+        return _Border(C[:, self._at] @ rows, None, self._factor, C)
 
     def _krylov(self, K, G, C, rhs, gap, act, target):
         """(du (nf,), lambda (k,), GMRES iterations) solving `_solve`'s system with the current
@@ -402,13 +430,13 @@ class FiniteContact:
             return (K @ whole + G.T @ ((G @ whole) / D))[free]
 
         X = self._columns(act, C)
-        S = sla.lu_factor(C @ X) if C.shape[0] else None
+        S = sla.lu_factor(X.CX) if C.shape[0] else None
 
         def bordered(x, g):                      # (du, lambda) of the old tangent's system, x = K_old^-1 b
             if S is None:
                 return x, np.zeros(0)
             lam = sla.lu_solve(S, -g - C @ x)
-            return x + X @ lam, lam
+            return x + X.times(lam), lam
 
         du, lam = bordered(F(rhs, refine=False), gap)
         r = rhs - tangent(du) + C.T @ lam

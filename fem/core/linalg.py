@@ -9,8 +9,9 @@
                                            quasi-definite [[Kdev, B^T], [B, -D]], with refinement on K
     solve_refined(A, b)                    one solve of a sparse symmetric indefinite A, one step of
                                            iterative refinement
-    drop_round_off, onto_pattern           the pattern PARDISO is given: free of round-off entries,
-                                           or an earlier one's grown by real entries
+
+The pattern PARDISO is given (free of round-off entries, or an earlier one's grown by real
+entries, or gathered onto it) is built by `fem.core.patterns`.
 
 PARDISO comes from MKL through pypardiso; without pypardiso SciPy's SuperLU is used (much slower,
 with a warning). Every call into pypardiso's internals is in this module: `Pardiso` calls MKL's
@@ -32,6 +33,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
+from fem.core.patterns import Gather, drop_round_off, onto_pattern
 from fingertip.errors import InputError
 
 logger = logging.getLogger(__name__)
@@ -386,61 +388,6 @@ def solve_refined(A: sp.spmatrix, b: np.ndarray) -> np.ndarray:
 
 
 # --------------------------------------------------------------------------- saddle system
-ROUND_OFF = 1e-12
-
-
-def drop_round_off(upper: sp.csr_matrix, rtol: float = ROUND_OFF) -> sp.csr_matrix:
-    """The upper triangle (CSR) of a symmetric matrix without its off-diagonal entries below
-    rtol * sqrt(|a_ii a_jj|): explicit zeros, and sums that cancel to round-off, whose presence
-    depends on the order of summation (a rotation's sparse product keeps 1e-17 and drops 0.0).
-
-    The ordering PARDISO's METIS finds depends on the pattern, and its fill is sensitive to it:
-    on the human 0.5 mm first run (13.8 M entries, 22,500 of them below 1e-14 of the diagonal
-    scale and none between 1e-14 and 1e-12), patterns differing only in such entries gave
-    factorisations of 1,077 to 1,374 GFlop; without them, 1,059. The pattern, and so the ordering
-    and the factorisation's cost, then no longer depend on the order of summation (they still
-    depend on which layers share a modulus: a sum over two layers' elements cancels only when
-    their moduli are equal). The matrix changes by at most rtol of its diagonal scale; residuals
-    are still checked against the exact matrix."""
-    upper = upper.tocsr(copy=True)
-    d = np.sqrt(np.abs(upper.diagonal()))
-    rows = np.repeat(np.arange(upper.shape[0], dtype=upper.indices.dtype), np.diff(upper.indptr))
-    scale = d[rows]                     # in place from here: fresh temporaries of the matrix's size
-    scale *= d[upper.indices]           # cost page faults (5x the time on the human 0.5 mm matrix)
-    scale *= rtol
-    small = np.abs(upper.data) <= scale
-    small &= rows != upper.indices
-    upper.data[small] = 0.0
-    upper.eliminate_zeros()
-    return upper
-
-
-def onto_pattern(upper: sp.csr_matrix, indptr, indices, rtol: float = ROUND_OFF) -> sp.csr_matrix:
-    """The upper triangle (CSR) `upper` (n, n) on the union of the sorted CSR pattern (indptr
-    (n + 1,), indices) and its own entries above `drop_round_off`'s threshold (positions it lacks
-    as explicit zeros). A Newton's tangents differ from one another in which entries cancel to
-    round-off and in a few that grow from zero as the body deforms: on a pattern carried from one
-    tangent to the next, each factorisation but a few reuses the first one's analysis (the 2D
-    cylinder with bone, 12,648 unknowns, C5 to 2 mm: 16 ms a factorisation instead of 55 ms)."""
-    n = upper.shape[0]
-    upper = drop_round_off(upper, rtol)
-    upper.sort_indices()
-    keys = np.repeat(np.arange(n, dtype=np.int64), np.diff(upper.indptr)) * n + upper.indices
-    old = np.repeat(np.arange(n, dtype=np.int64), np.diff(indptr)) * n + indices
-    at = np.searchsorted(old, keys)
-    extra = keys[old[np.minimum(at, len(old) - 1)] != keys]
-    if not extra.size:
-        data = np.zeros(len(old))
-        data[at] = upper.data
-        return sp.csr_matrix((data, indices, indptr), shape=upper.shape)
-    union = np.insert(old, np.searchsorted(old, extra), extra)          # both sorted
-    data = np.zeros(len(union))
-    data[np.searchsorted(union, keys)] = upper.data
-    rows = union // n
-    return sp.csr_matrix((data, (union - rows * n).astype(np.int32),
-                          np.searchsorted(rows, np.arange(n + 1)).astype(np.int32)), shape=upper.shape)
-
-
 class SaddleFactor:
     """K = Kdev + B^T D^-1 B (n, n) factorised once and reused for many right-hand sides.
 
@@ -479,29 +426,33 @@ class SaddleFactor:
         self.Kdev, self.B, self.D = Kdev, B, D
         self._free = None if free is None else np.asarray(free)
         self.n = Kdev.shape[0] if free is None else len(self._free)
-        if free is not None:
-            Kdev, B = Kdev[self._free][:, self._free], B[:, self._free]
         self.refinements = 0        # refinement steps taken by the last call
         self.refine_tol = self.REFINE_TOL
         self.condensed = np.zeros(0, dtype=int)
         self._pardiso = None
+        self._gather = None         # `Gather` of this input pattern onto the factorised one, handed on
         self._T = None if rotation is None else sp.csr_matrix(rotation)
-        if self._T is not None:
-            Kdev, B = (self._T.T @ Kdev @ self._T).tocsr(), (B @ self._T).tocsr()
-        if not _pardiso_available():
-
-            A = sp.bmat([[Kdev, B.T], [B, -sp.diags(D)]], format="csc")
-            self.backend, self._solve = "scipy-splu", splu(A).solve
-            return
+        earlier = None if reuse is None else reuse._pardiso
+        upper = None
+        if earlier is not None and self._T is None and (condensed is None or not len(condensed)):
+            upper = self._gathered(reuse)
+        if upper is None:
+            if free is not None:
+                Kdev, B = Kdev[self._free][:, self._free], B[:, self._free]
+            if self._T is not None:
+                Kdev, B = (self._T.T @ Kdev @ self._T).tocsr(), (B @ self._T).tocsr()
+            if not _pardiso_available():
+                A = sp.bmat([[Kdev, B.T], [B, -sp.diags(D)]], format="csc")
+                self.backend, self._solve = "scipy-splu", splu(A).solve
+                return
+            # symmetric types read the upper triangle, built without the full matrix (half the
+            # memory and time of triu(bmat(...)); the local blocks are freed before the factorisation)
+            upper = sp.bmat([[sp.triu(Kdev), B.T], [None, -sp.diags(D)]], format="csr")
+            del Kdev, B
+            upper = (onto_pattern(upper, *earlier.pattern) if earlier is not None and earlier.reusable
+                     and earlier.n == upper.shape[0] else drop_round_off(upper))
         from pypardiso.pardiso_wrapper import PyPardisoError
 
-        # symmetric types read the upper triangle, built without the full matrix (half the
-        # memory and time of triu(bmat(...)); the local blocks are freed before the factorisation)
-        upper = sp.bmat([[sp.triu(Kdev), B.T], [None, -sp.diags(D)]], format="csr")
-        del Kdev, B
-        earlier = None if reuse is None else reuse._pardiso
-        upper = (onto_pattern(upper, *earlier.pattern) if earlier is not None and earlier.reusable
-                 and earlier.n == upper.shape[0] else drop_round_off(upper))
         try:
             self._pardiso = Pardiso(upper, condensed, reuse=earlier)
         except (PyPardisoError, np.linalg.LinAlgError) as exc:
@@ -509,6 +460,21 @@ class SaddleFactor:
                              "mesh is held") from None
         self.backend, self._solve = "pardiso", self._pardiso.solve
         self.condensed = self._pardiso.schur
+
+    def _gathered(self, reuse: "SaddleFactor"):
+        """The matrix to factorise on `reuse`'s pattern by `Gather` (built on the first reuse,
+        handed on while the input and factorised patterns stay), or None: not reusable, or the
+        pattern grows."""
+        earlier = reuse._pardiso
+        if (not earlier.reusable or earlier.n != self.n + len(self.D) or not self.Kdev.has_canonical_format
+                or not self.B.has_canonical_format):
+            return None
+        key = Gather.fingerprint(self.Kdev, self.B, self.D, self._free)
+        gather = reuse._gather
+        if gather is None or not gather.serves(key, earlier._ia, earlier._ja):
+            gather = Gather(self.Kdev, self.B, self.D, self._free, earlier._ia, earlier._ja)
+        self._gather = gather
+        return gather.upper(self.Kdev, self.B, self.D)
 
     @property
     def nnz_factor(self) -> float:

@@ -83,8 +83,11 @@ NO_FLUID_CORE = ("the large-deformation solver has no fluid core (layer 6); "
 class NeoHookean:
     """Nearly incompressible neo-Hookean solid on a `fem.core.model.Model` (3D tetrahedra or 2D plane
     strain; same mesh, layers, materials, regions and pressure space). Element work is done in
-    chunks of `chunk` elements (the 3D tangent holds 900 numbers per element)."""
-    def __init__(self, model, chunk: int = 4000):
+    chunks of `chunk` elements (the 3D tangent holds 900 numbers per element: 0.12 GB a chunk, a few
+    times over while it is formed). Each chunk's sum into the tangent passes over all of its
+    entries, so larger chunks pay on large models: the human 0.5 mm model's tangent (72,577
+    tetrahedra) in 1.17 s with 16,000 against 1.44 s with 4,000; the 1 mm monkey's 0.23 s either way."""
+    def __init__(self, model, chunk: int = 16000):
         if (model.layer == FLUID_LAYER).any():
             raise InputError(NO_FLUID_CORE)
         self.model, self.dim, self.chunk = model, model.dim, int(chunk)

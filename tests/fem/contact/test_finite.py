@@ -404,21 +404,33 @@ def test_newton_krylov_steps_give_the_factorised_answer_with_fewer_factorisation
             super().__init__(*args, **kw)
 
     monkeypatch.setattr(finite, "SaddleFactor", Counted)
-    runs, factorisations = {}, {}
-    for krylov, budget in ((False, finite.COLUMNS_MAX_BYTES), (True, 0), (True, finite.COLUMNS_MAX_BYTES)):
+    borders = []
+
+    class Spied(finite._Border):
+        def __init__(self, *args):
+            borders.append(args[1] is not None)                   # whole columns kept
+            super().__init__(*args)
+
+    monkeypatch.setattr(finite, "_Border", Spied)
+    runs, factorisations, whole = {}, {}, {}
+    rows_only = 8 * 3 * len(FiniteContact(model, "top", held).dofs) ** 2   # every candidate's rows, few whole columns
+    for krylov, budget in ((False, finite.COLUMNS_MAX_BYTES), (True, 0), (True, rows_only),
+                           (True, finite.COLUMNS_MAX_BYTES)):
         monkeypatch.setattr(finite, "COLUMNS_MAX_BYTES", budget)     # 0: no column kept between iterations
         monkeypatch.setattr(finite, "COLUMN_BLOCK", 3 if krylov else 64)   # several blocks per solve
         fc = FiniteContact(model, "top", held)
         fc.krylov = krylov
         made.clear()
+        borders.clear()
         runs[krylov, budget] = fc.indent(ind, [0.25, 0.5])
-        factorisations[krylov] = len(made)
+        factorisations[krylov], whole[budget] = len(made), set(borders)
     reference = runs[False, finite.COLUMNS_MAX_BYTES]
-    for key in ((True, 0), (True, finite.COLUMNS_MAX_BYTES)):
+    for key in ((True, 0), (True, rows_only), (True, finite.COLUMNS_MAX_BYTES)):
         for a, b in zip(reference, runs[key]):
             assert b.force_N == pytest.approx(a.force_N, rel=1e-7)
             assert b.energy_Nmm == pytest.approx(a.energy_Nmm, rel=1e-7)
     assert factorisations[True] < factorisations[False]
+    assert whole[0] == {False} and False in whole[rows_only] and whole[finite.COLUMNS_MAX_BYTES] == {True}
 
     # one step at the last state, on the factorisation of the state before (fc still holds it)
     r = runs[True, finite.COLUMNS_MAX_BYTES][-1]

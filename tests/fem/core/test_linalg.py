@@ -223,11 +223,62 @@ def test_serial_openblas_limits_openblas_and_leaves_mkl():
     assert threads() == before
 
 
+def test_a_reused_factorisation_gathers_the_matrix_the_long_way_would_build():
+    """A factorisation on an earlier one's pattern builds its matrix by a gather (`Gather`) equal,
+    bit for bit, to restricting, stacking and `onto_pattern`: with new values, with entries at
+    round-off (zeros there), and when an entry above round-off falls outside the pattern (then it
+    is built the long way, on the grown pattern)."""
+    from fem.core.patterns import onto_pattern
+
+    rng = np.random.default_rng(3)
+    n, m = 80, 12
+    A = sp.random(n, n, density=0.06, random_state=4, format="csr")
+    pattern = (A + A.T + sp.eye(n)).tocsr()
+    B = sp.random(m, n, density=0.1, random_state=5, format="csr")
+    D, free = rng.uniform(0.5, 1.0, m), np.sort(rng.choice(n, n - 7, replace=False))
+
+    def stiffness(values):
+        K = pattern.copy()
+        K.data = values
+        return ((K + K.T) * 0.5 + sp.diags(np.full(n, float(n)))).tocsr()
+
+    def long_way(K, earlier):
+        Kf, Bf = K[free][:, free], B[:, free]
+        return onto_pattern(sp.bmat([[sp.triu(Kf), Bf.T], [None, -sp.diags(D)]], format="csr"), *earlier.pattern)
+
+    first = SaddleFactor(stiffness(rng.uniform(-1, 1, pattern.nnz)), B, D, free=free)
+    K = stiffness(rng.uniform(-1, 1, pattern.nnz)).tolil()
+    upper = sp.triu(first.Kdev[free][:, free], 1).tocoo()
+    for r, c in zip(free[upper.row[:5]], free[upper.col[:5]]):
+        K[r, c] = K[c, r] = 1e-15                       # round-off: explicit zeros on the pattern
+    K = K.tocsr()
+    again = SaddleFactor(K, B, D, free=free, reuse=first)
+    expected = long_way(K, first._pardiso)
+    assert again._gather is not None and np.count_nonzero(expected.data == 0) >= 5
+    np.testing.assert_array_equal(again._pardiso._data, expected.data)
+    np.testing.assert_array_equal(again._pardiso._ja - 1, expected.indices)
+    again(rng.standard_normal(len(free)))
+    assert again.last_residual < 1e-10
+
+    grown = K.tolil()
+    i, j = free[0], free[-1]                            # a coupling the pattern lacks
+    assert K[i, j] == 0
+    grown[i, j] = grown[j, i] = 0.3
+    grown = grown.tocsr()
+    third = SaddleFactor(grown, B, D, free=free, reuse=again)
+    assert third._gather.upper(grown, B, D) is None
+    expected = long_way(grown, again._pardiso)
+    assert len(expected.data) > len(again._pardiso._data)
+    np.testing.assert_array_equal(third._pardiso._data, expected.data)
+    third(rng.standard_normal(len(free)))
+    assert third.last_residual < 1e-10
+
+
 def test_drop_round_off_leaves_a_pattern_free_of_summation_order():
     """Entries at round-off of the diagonal scale (and explicit zeros) go, the diagonal and every
     entry above the threshold stay: two matrices that differ only by round-off-sized entries get
     the same pattern, hence the same PARDISO ordering."""
-    from fem.core.linalg import drop_round_off
+    from fem.core.patterns import drop_round_off
 
     rng = np.random.default_rng(3)
     n = 60
@@ -253,7 +304,7 @@ def test_onto_pattern_keeps_the_earlier_pattern_and_grows_it_by_real_entries():
     """A matrix that lacks some of an earlier pattern's entries and has round-off ones outside it
     lands on that pattern (explicit zeros, the round-off dropped); an entry above round-off
     outside it joins it. The values are the matrix's own."""
-    from fem.core.linalg import drop_round_off, onto_pattern
+    from fem.core.patterns import drop_round_off, onto_pattern
 
     rng = np.random.default_rng(8)
     n = 50
