@@ -197,7 +197,9 @@ class Pardiso:
     np.linalg.LinAlgError for an empty row or an S that is not positive definite.
     reuse: an earlier factorisation of a matrix with the same pattern (`takes`): its analysis (the
     ordering and symbolic factor, a quarter of a factorisation's time on the 1 mm monkey's
-    neo-Hookean tangent) serves this one, which takes over its handle (`reuse` cannot solve after).
+    neo-Hookean tangent) serves this one, which takes over its handle; for another pattern, `reuse`
+    is released before this one is factorised (both factors held at once took 8.7 GB instead of
+    5.2 GB on the human 0.5 mm model). Either way `reuse` cannot solve after.
     """
     def __init__(self, upper: sp.csr_matrix, schur: np.ndarray | None = None, mkl_defaults: bool = False,
                  reuse: "Pardiso | None" = None):
@@ -233,7 +235,10 @@ class Pardiso:
             # (two-level factorisation, iparm[23] = 1, is about 9 % faster on 2 cores, but its
             # last digits depend on the thread count: a Dask task's run would differ from serial)
         self._live = True
-        if not has_schur and reuse is not None and reuse.takes(self):
+        taken = not has_schur and reuse is not None and reuse.takes(self)
+        if reuse is not None and not taken:
+            reuse.release()             # another pattern: its factor goes before this one is made
+        if taken:
             self._pt, self.iparm = reuse._pt, reuse.iparm       # its analysis (ordering, symbolic factor)
             reuse._live = False                                 # the handle is this factorisation's now
             self._long_phase(22, np.zeros((self.n, 1), order="F"), np.zeros((self.n, 1), order="F"), 1)

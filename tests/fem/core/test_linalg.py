@@ -227,7 +227,8 @@ def test_a_reused_factorisation_gathers_the_matrix_the_long_way_would_build():
     """A factorisation on an earlier one's pattern builds its matrix by a gather (`Gather`) equal,
     bit for bit, to restricting, stacking and `onto_pattern`: with new values, with entries at
     round-off (zeros there), and when an entry above round-off falls outside the pattern (then it
-    is built the long way, on the grown pattern)."""
+    is built the long way, on the grown pattern, and the earlier factorisation is released before
+    the new one is made)."""
     from fem.core.patterns import onto_pattern
 
     rng = np.random.default_rng(3)
@@ -255,6 +256,7 @@ def test_a_reused_factorisation_gathers_the_matrix_the_long_way_would_build():
     again = SaddleFactor(K, B, D, free=free, reuse=first)
     expected = long_way(K, first._pardiso)
     assert again._gather is not None and np.count_nonzero(expected.data == 0) >= 5
+    assert again._pardiso._pt is first._pardiso._pt                                    # its analysis taken over
     np.testing.assert_array_equal(again._pardiso._data, expected.data)
     np.testing.assert_array_equal(again._pardiso._ja - 1, expected.indices)
     again(rng.standard_normal(len(free)))
@@ -267,6 +269,7 @@ def test_a_reused_factorisation_gathers_the_matrix_the_long_way_would_build():
     grown = grown.tocsr()
     third = SaddleFactor(grown, B, D, free=free, reuse=again)
     assert third._gather.upper(grown, B, D) is None
+    assert third._pardiso._pt is not again._pardiso._pt and not again._pardiso._live   # released first
     expected = long_way(grown, again._pardiso)
     assert len(expected.data) > len(again._pardiso._data)
     np.testing.assert_array_equal(third._pardiso._data, expected.data)
