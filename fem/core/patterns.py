@@ -1,4 +1,5 @@
-"""Sparse patterns of the factorised saddle matrix (`fem.core.linalg.SaddleFactor`):
+"""Sparse patterns of the factorised saddle matrix (`fem.core.linalg.SaddleFactor`): free of
+round-off entries, carried from one matrix to the next, and filled by a gather.
 
     drop_round_off(upper)                  the upper triangle without entries at round-off, so the
                                            pattern (and PARDISO's ordering) does not depend on the
