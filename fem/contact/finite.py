@@ -409,11 +409,9 @@ class FiniteContact:
             block = missing[b:b + size]
             x = self._factor(C[block].T.toarray(), refine=False)
             self._cols.update(zip(act[block], (x if self._whole else x[self._at]).T.copy()))
-        if self._whole:
-            X = np.column_stack([self._cols[i] for i in act]) if len(act) else np.zeros((len(self.free), 0))
-            return _Border(C @ X, X)
-        rows = np.column_stack([self._cols[i] for i in act]) if len(act) else np.zeros((len(self._at), 0))
-        return _Border(C[:, self._at] @ rows, None, self._factor, C)
+        Y = (np.column_stack([self._cols[i] for i in act]) if len(act)
+             else np.zeros((len(self.free) if self._whole else len(self._at), 0)))
+        return _Border(C @ Y, Y) if self._whole else _Border(C[:, self._at] @ Y, None, self._factor, C)
 
     def _krylov(self, K, G, C, rhs, gap, act, target):
         """(du (nf,), lambda (k,), GMRES iterations) solving `_solve`'s system with the current

@@ -19,6 +19,25 @@ import scipy.sparse as sp
 ROUND_OFF = 1e-12
 
 
+def _round_off(data, indptr, indices, d, rtol: float) -> np.ndarray:
+    """(nnz,) bool: the off-diagonal entries of the CSR upper triangle (data, indptr, indices) at or
+    below rtol * d_i d_j, d (n,) the square roots of |diagonal|."""
+    rows = np.repeat(np.arange(len(indptr) - 1, dtype=indices.dtype), np.diff(indptr))
+    scale = d[rows]                     # in place from here: fresh temporaries of the matrix's size
+    scale *= d[indices]                 # cost page faults (5x the time on the human 0.5 mm matrix)
+    scale *= rtol
+    small = np.abs(data) <= scale
+    small &= rows != indices
+    return small
+
+
+def _keys(indptr, indices) -> np.ndarray:
+    """(nnz,) int64 row n + column of each entry of a CSR pattern with n rows: sorted for sorted
+    indices."""
+    n = len(indptr) - 1
+    return np.repeat(np.arange(n, dtype=np.int64), np.diff(indptr)) * n + indices
+
+
 def drop_round_off(upper: sp.csr_matrix, rtol: float = ROUND_OFF) -> sp.csr_matrix:
     """The upper triangle (CSR) of a symmetric matrix without its off-diagonal entries below
     rtol * sqrt(|a_ii a_jj|): explicit zeros, and sums that cancel to round-off, whose presence
@@ -33,14 +52,7 @@ def drop_round_off(upper: sp.csr_matrix, rtol: float = ROUND_OFF) -> sp.csr_matr
     their moduli are equal). The matrix changes by at most rtol of its diagonal scale; residuals
     are still checked against the exact matrix."""
     upper = upper.tocsr(copy=True)
-    d = np.sqrt(np.abs(upper.diagonal()))
-    rows = np.repeat(np.arange(upper.shape[0], dtype=upper.indices.dtype), np.diff(upper.indptr))
-    scale = d[rows]                     # in place from here: fresh temporaries of the matrix's size
-    scale *= d[upper.indices]           # cost page faults (5x the time on the human 0.5 mm matrix)
-    scale *= rtol
-    small = np.abs(upper.data) <= scale
-    small &= rows != upper.indices
-    upper.data[small] = 0.0
+    upper.data[_round_off(upper.data, upper.indptr, upper.indices, np.sqrt(np.abs(upper.diagonal())), rtol)] = 0.0
     upper.eliminate_zeros()
     return upper
 
@@ -55,8 +67,7 @@ def onto_pattern(upper: sp.csr_matrix, indptr, indices, rtol: float = ROUND_OFF)
     n = upper.shape[0]
     upper = drop_round_off(upper, rtol)
     upper.sort_indices()
-    keys = np.repeat(np.arange(n, dtype=np.int64), np.diff(upper.indptr)) * n + upper.indices
-    old = np.repeat(np.arange(n, dtype=np.int64), np.diff(indptr)) * n + indices
+    keys, old = _keys(upper.indptr, upper.indices), _keys(indptr, indices)
     at = np.searchsorted(old, keys)
     extra = keys[old[np.minimum(at, len(old) - 1)] != keys]
     if not extra.size:
@@ -88,8 +99,7 @@ class Gather:
             Kc, Bc = Kc[free][:, free], Bc[:, free]
         upper = sp.bmat([[sp.triu(Kc), Bc.T], [None, sp.diags(code[n_k + n_b:])]], format="csr")
         n = upper.shape[0]
-        keys = np.repeat(np.arange(n, dtype=np.int64), np.diff(upper.indptr)) * n + upper.indices
-        old = np.repeat(np.arange(n, dtype=np.int64), np.diff(ia - 1)) * n + (ja - 1)
+        keys, old = _keys(upper.indptr, upper.indices), _keys(ia - 1, ja - 1)
         at = np.minimum(np.searchsorted(old, keys), len(old) - 1)
         inside = old[at] == keys
         src = upper.data.astype(np.int64) - 1                              # into concat(Kdev, B, -D)
@@ -125,12 +135,6 @@ class Gather:
             kept = np.where(diagonal, v != 0, np.abs(v) > rtol * d[self.out_row] * d[self.out_col])
             if kept.any():
                 return None
-        n, cols = len(self.ia) - 1, self.ja - 1
-        rows = np.repeat(np.arange(n, dtype=np.int32), np.diff(self.ia))
-        scale = d[rows]                          # as drop_round_off: these entries are explicit zeros there
-        scale *= d[cols]
-        scale *= rtol
-        small = np.abs(data) <= scale
-        small &= rows != cols
-        data[small] = 0.0
-        return sp.csr_matrix((data, cols, self.ia - 1), shape=(n, n))
+        indptr, indices = self.ia - 1, self.ja - 1
+        data[_round_off(data, indptr, indices, d, rtol)] = 0.0    # drop_round_off's, as explicit zeros
+        return sp.csr_matrix((data, indices, indptr), shape=(len(indptr) - 1,) * 2)
