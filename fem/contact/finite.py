@@ -27,7 +27,13 @@ rate, reaches the tolerance within FINISH more iterations) is solved on the last
 (a chord step). In 3D, where a factorisation costs about 60 solves (the 1 mm monkey), any other
 iteration is first solved with its own tangent by GMRES on the last factorisation (`_krylov`, a
 Newton-Krylov step), and factorises only when that does not reach ETA of the residual within
-KRYLOV_MAX iterations. It stops when the active set
+KRYLOV_MAX iterations. In 3D the factorisations are in single precision (`fem.core.linalg.Pardiso`,
+PARDISO's iparm[27] = 1: half the factorisation's time and memory, faster solves) and every
+iteration, chord steps and those right after a factorisation too, is solved by GMRES on it: a
+single-precision solve of the layered fingertip is accurate to about 1e-3, well inside ETA, so
+those take 0-1 GMRES iterations; a factorisation GMRES cannot use is redone in double precision
+for the rest of the run (in 2D, with a factorisation per iteration costing about a solve, double
+precision throughout). It stops when the active set
 is stable, the free residual is below `tol` of the contact force (1e-8: the solves skip iterative
 refinement, so the last iterations converge linearly, and each further digit of the residual costs
 about one more tangent while the force is settled to 9-10 digits) and every gap is within GAP_TOL_MM,
@@ -135,6 +141,21 @@ class FiniteResult:
     iterations: int
 
 
+def _positions(A: sp.csr_matrix, dofs) -> np.ndarray:
+    """(k d d,) positions in A.data (CSR, sorted indices) of the entries A[dofs[a, i], dofs[a, j]],
+    dofs (k, d), row by row; KeyError when one is not stored."""
+    rows = np.asarray(dofs).reshape(-1)
+    cols = np.repeat(np.asarray(dofs), dofs.shape[1], axis=0).reshape(-1)      # each row's d columns
+    start, length = A.indptr[rows], np.diff(A.indptr)[rows]
+    at = np.repeat(start - np.cumsum(length) + length, length) + np.arange(length.sum())   # the rows' entries
+    keys = np.repeat(np.arange(len(rows), dtype=np.int64), length) * A.shape[1] + A.indices[at]
+    wanted = np.repeat(np.arange(len(rows), dtype=np.int64), dofs.shape[1]) * A.shape[1] + cols
+    found = np.searchsorted(keys, wanted)
+    if len(wanted) and (found.max() >= len(keys) or np.any(keys[found] != wanted)):
+        raise KeyError("an entry of the DOF blocks is not in the matrix's pattern")
+    return at[found]
+
+
 class _Border:
     """The active constraints' columns X = K_T^-1 C^T (nf, k) on one factorisation, as a bordered
     solve uses them: CX = C X (k, k), and X lambda (`times`) from the columns X when they are kept
@@ -162,6 +183,7 @@ class FiniteContact:
         self._whole = True              # whether _cols holds whole columns (else their rows at `_at`)
         self._stale = False             # the last Newton-Krylov step found it aged: factorise the next tangent
         self.krylov = model.dim == 3    # Newton-Krylov steps (module notes)
+        self.single = self.krylov       # factorisations in single precision (module notes)
         self.sn = model.surface_nodes(region)
         self.fixed, values = model.discretisation.constraints(held, model.material.rigid)   # no factorisation
         if np.any(values):
@@ -376,19 +398,32 @@ class FiniteContact:
         return FiniteResult(float(depth), force, u.copy(), lam.copy(), g, n, self.nh.stored_energy(u),
                             float(max(0.0, -g.min())), float(J.min()), iterations)
 
-    def _solve(self, K, G, C, rhs, gap, act):
+    def _solve(self, K, G, C, rhs, gap, act, target):
         """(du (nf,), lambda (k,)) on the free DOFs of [[K_T, -C^T], [-C, 0]] [du, lambda] = [rhs,
         gap], K_T = K + G^T D^-1 G the mixed tangent (`fem.core.linalg.SaddleFactor`, as the linear
         solver's): du = x0 + X lambda with x0 = K_T^-1 rhs, X = K_T^-1 C^T (`_columns` of the active
         candidates act (k,)), and the constraints C du = -gap give (C X) lambda = -gap - C x0 (k x k,
-        dense). K None: the last tangent's factorisation (a chord step)."""
+        dense). K None: the last tangent's factorisation (a chord step). A single-precision
+        factorisation (`single`) is GMRES's preconditioner (`_krylov`) to the force residual
+        `target` [N] or ETA of the step's change of contact forces; where it does not get there,
+        the tangent is factorised in double precision, for the rest of the run."""
         if K is not None:
-            self._factor = SaddleFactor(K, G, self.nh.D, free=self.free, reuse=self._factor)   # the same pattern
-            self._cols, self._whole = {}, True
+            self._factorise(K, G, self.single)
+        if self._factor.single:
+            solved = self._krylov(self._factor.apply, C, rhs, gap, act, target, ETA)
+            if solved is not None:
+                return solved[:2]
+            self.single = False
+            self._factorise(self._factor.Kdev, self._factor.B, False)
         x0 = self._factor(rhs, refine=False)                                     # Newton corrects it
         X = self._columns(act, C)
         lam = np.linalg.solve(X.CX, -gap - C @ x0) if C.shape[0] else np.zeros(0)
         return x0 + X.times(lam), lam
+
+    def _factorise(self, K, G, single):
+        self._factor = SaddleFactor(K, G, self.nh.D, free=self.free, reuse=self._factor, single=single,
+                                    keep_zeros=True)        # the tangents' fixed pattern: one analysis
+        self._cols, self._whole = {}, True
 
     def _columns(self, act, C) -> _Border:
         """X = K_T^-1 C^T of the last factorisation for the active candidates act (k,) (C: their rows,
@@ -413,20 +448,25 @@ class FiniteContact:
              else np.zeros((len(self.free) if self._whole else len(self._at), 0)))
         return _Border(C @ Y, Y) if self._whole else _Border(C[:, self._at] @ Y, None, self._factor, C)
 
-    def _krylov(self, K, G, C, rhs, gap, act, target):
-        """(du (nf,), lambda (k,), GMRES iterations) solving `_solve`'s system with the current
-        tangent (K with `_bent`'s curvature, G) by GMRES on the last factorisation, or None when the
-        force rows' residual is not below `target` [N] within KRYLOV_MAX iterations. Right-
+    def _tangent(self, K, G):
+        """x (nf,) -> K_T x on the free DOFs, K_T = K + G^T D^-1 G (K with `_bent`'s curvature)."""
+        free, D = self.free, self.nh.D
+        whole = np.zeros(self.model.ndof)
+
+        def apply(x):
+            whole[free] = x
+            return (K @ whole + G.T @ ((G @ whole) / D))[free]
+        return apply
+
+    def _krylov(self, tangent, C, rhs, gap, act, target, eta_force=0.0):
+        """(du (nf,), lambda (k,), GMRES iterations) solving `_solve`'s system with the tangent
+        `tangent` (`_tangent`) by GMRES on the last factorisation, or None when the
+        force rows' residual is not below `target` [N], or eta_force times the contact forces'
+        change C^T lambda of the first iterate, within KRYLOV_MAX iterations. Right-
         preconditioned by the bordered solve with that older tangent and started from its chord
         step: that preconditioner meets the constraint rows exactly, so GMRES iterates on the
         force rows alone (r = rhs - K_T du + C^T lambda)."""
-        F, free, D = self._factor, self.free, self.nh.D
-        whole = np.zeros(self.model.ndof)
-
-        def tangent(x):                          # K_T x on the free DOFs, K_T = K + G^T D^-1 G
-            whole[free] = x
-            return (K @ whole + G.T @ ((G @ whole) / D))[free]
-
+        F = self._factor
         X = self._columns(act, C)
         S = sla.lu_factor(X.CX) if C.shape[0] else None
 
@@ -439,6 +479,7 @@ class FiniteContact:
         du, lam = bordered(F(rhs, refine=False), gap)
         r = rhs - tangent(du) + C.T @ lam
         beta = float(np.linalg.norm(r))
+        target = max(target, eta_force * float(np.linalg.norm(C.T @ lam)))
         if beta <= target:
             return du, lam, 0
         V, Z, H = [r / beta], [], np.zeros((KRYLOV_MAX + 1, KRYLOV_MAX))
@@ -460,15 +501,15 @@ class FiniteContact:
         return None
 
     def _bent(self, K, act, lam, n, curv, straight):
-        """K plus the contact curvature -lambda k (I - n n^T - t t^T) on the active nodes' DOF blocks."""
+        """K with the contact curvature -lambda k (I - n n^T - t t^T) added on the active nodes' DOF
+        blocks, in place (K's pattern, which holds every node's own block, is kept)."""
         dim = self.model.dim
         bent = act[(lam[act] > 0) & (curv[act] != 0)]
         nn, tt = n[bent, :dim], straight[bent, :dim]
         H = -(lam[bent] * curv[bent])[:, None, None] * (np.eye(dim) - nn[:, :, None] * nn[:, None, :]
                                                         - tt[:, :, None] * tt[:, None, :])
-        d = self.dofs[bent]
-        return K + sp.csr_matrix((H.ravel(), (np.repeat(d, dim, axis=1).ravel(), np.tile(d, (1, dim)).ravel())),
-                                 shape=K.shape)
+        K.data[_positions(K, self.dofs[bent])] += H.ravel()
+        return K
 
     def _newton(self, u, lam, surf, travel, tol=None):
         """(u, lambda (m,), iterations) at one travel, from the last state (module notes); tol: the
@@ -513,10 +554,10 @@ class FiniteContact:
                     _, K, G = self.nh.tangent(u)
                 K = self._bent(K, act, lam, n, curv, straight)
                 if self.krylov and self._factor is not None and not self._stale:
-                    solved = self._krylov(K, G, Cf, -fr, g[act], act, ETA * norm)
+                    solved = self._krylov(self._tangent(K, G), Cf, -fr, g[act], act, ETA * norm)
                     self._stale = solved is not None and solved[2] > KRYLOV_STALE
             if solved is None:
-                du, dlam = self._solve(K, G, Cf, -fr, g[act], act)
+                du, dlam = self._solve(K, G, Cf, -fr, g[act], act, ETA * norm)
                 self._stale = self._stale and chord
             else:
                 du, dlam = solved[:2]

@@ -346,6 +346,34 @@ def _profile_boundary(code) -> np.ndarray:
     return np.vstack(pts)
 
 
+def test_contact_curvature_is_added_into_the_tangents_own_entries():
+    """`FiniteContact._bent` adds -lambda k (I - n n^T - t t^T) on the active nodes' DOF blocks into
+    the tangent's stored entries: the same matrix as adding it as a sparse matrix, on the same
+    pattern (so one PARDISO analysis serves every tangent of a run)."""
+    import scipy.sparse as sp
+    model, held = quarter_block(0.48, 0.4, 4.0, E_MPa=0.01)
+    fc = FiniteContact(model, "top", held)
+    _, K, _ = fc.nh.tangent(np.zeros(model.ndof))
+    rng = np.random.default_rng(3)
+    m = len(fc.dofs)
+    act = np.sort(rng.choice(m, 7, replace=False))
+    lam, curv = rng.uniform(0.0, 1.0, m), rng.uniform(0.1, 1.0, m)
+    lam[act[0]], curv[act[1]] = 0.0, 0.0                          # neither bends
+    n = rng.standard_normal((m, 3))
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    t = np.cross(n, rng.standard_normal((m, 3)))
+    t /= np.linalg.norm(t, axis=1)[:, None]
+    t[act[2]] = 0.0                                                 # a sphere: no straight direction
+    expected = K.toarray()
+    for i in act[2:]:
+        d = fc.dofs[i]
+        expected[np.ix_(d, d)] -= lam[i] * curv[i] * (np.eye(3) - np.outer(n[i], n[i]) - np.outer(t[i], t[i]))
+    indices = K.indices.copy()
+    bent = fc._bent(K, act, lam, n, curv, t)
+    assert sp.issparse(bent) and np.array_equal(bent.indices, indices)
+    np.testing.assert_allclose(bent.toarray(), expected, rtol=0, atol=1e-15 * np.abs(expected).max())
+
+
 @pytest.mark.parametrize("code", ["step:2", "step:0", "grating:1:1,2"])
 def test_step_and_grating_gaps_are_distances_to_their_profile(code):
     """Outside the solid (gap > 0.05 mm) a step's and a grating's gap is the distance to their
@@ -383,14 +411,17 @@ def test_a_depth_newton_cannot_reach_ends_in_one_error_line(section, tmp_path, c
 
 
 def test_newton_krylov_steps_give_the_factorised_answer_with_fewer_factorisations(monkeypatch):
-    """3D Newton-Krylov steps (GMRES on the last factorisation, `FiniteContact._krylov`): a 2 mm
-    sphere 0.25 and 0.5 mm into a soft quarter block (0.4 mm P2 under it) gives the forces and stored
-    energies of Newton with a factorisation in every non-chord iteration within 1e-7 (both solve to
-    a relative residual of 1e-8; measured within 1.1e-9), with fewer factorisations (measured 1
-    against 6), and so with no column of K_T^-1 C^T kept between iterations. One such step at the
-    last state, with the sphere 0.05 mm further and GMRES driven to 1e-7 of the right-hand side,
-    solves the bordered system of that state's tangent: its direct solve on its own factorisation
-    within 1e-6, the constraint rows exactly."""
+    """3D Newton-Krylov steps (GMRES on the last factorisation, `FiniteContact._krylov`), on
+    single-precision factorisations: a 2 mm sphere 0.25 and 0.5 mm into a soft quarter block (0.4
+    mm P2 under it) gives the forces and stored energies of Newton with a double-precision
+    factorisation in every non-chord iteration within 1e-7 (both solve to a relative residual of
+    1e-8; measured within 1.1e-9), with fewer factorisations (measured 1 against 6), and so with
+    no column of K_T^-1 C^T kept between iterations. Where GMRES cannot use a single-precision
+    factorisation (here: asked for 1e-14 of the residual and allowed no iteration), the tangent is
+    factorised in double precision and the run ends with the same answer. One Newton-Krylov step at the last state, with the sphere
+    0.05 mm further and GMRES driven to 1e-7 of the right-hand side, solves the bordered system of
+    that state's tangent: its direct solve on its own factorisation within 1e-6, the constraint
+    rows exactly."""
     import scipy.sparse as sp
 
     import fem.contact.finite as finite
@@ -400,7 +431,7 @@ def test_newton_krylov_steps_give_the_factorised_answer_with_fewer_factorisation
 
     class Counted(finite.SaddleFactor):
         def __init__(self, *args, **kw):
-            made.append(1)
+            made.append(kw.get("single", False))
             super().__init__(*args, **kw)
 
     monkeypatch.setattr(finite, "SaddleFactor", Counted)
@@ -412,28 +443,33 @@ def test_newton_krylov_steps_give_the_factorised_answer_with_fewer_factorisation
             super().__init__(*args)
 
     monkeypatch.setattr(finite, "_Border", Spied)
-    runs, factorisations, whole = {}, {}, {}
+    runs, factorisations, whole, single = {}, {}, {}, {}
     rows_only = 8 * 3 * len(FiniteContact(model, "top", held).dofs) ** 2   # every candidate's rows, few whole columns
-    for krylov, budget in ((False, finite.COLUMNS_MAX_BYTES), (True, 0), (True, rows_only),
-                           (True, finite.COLUMNS_MAX_BYTES)):
+    for krylov, budget, gmres in ((False, finite.COLUMNS_MAX_BYTES, 12), (True, 0, 12), (True, rows_only, 12),
+                                  (True, finite.COLUMNS_MAX_BYTES, 0), (True, finite.COLUMNS_MAX_BYTES, 12)):
         monkeypatch.setattr(finite, "COLUMNS_MAX_BYTES", budget)     # 0: no column kept between iterations
         monkeypatch.setattr(finite, "COLUMN_BLOCK", 3 if krylov else 64)   # several blocks per solve
+        monkeypatch.setattr(finite, "KRYLOV_MAX", gmres)
+        monkeypatch.setattr(finite, "ETA", 3e-2 if gmres else 1e-14)    # out of single precision's reach
         fc = FiniteContact(model, "top", held)
-        fc.krylov = krylov
+        assert fc.krylov and fc.single                    # the 3D defaults
+        fc.krylov = fc.single = krylov
         made.clear()
         borders.clear()
-        runs[krylov, budget] = fc.indent(ind, [0.25, 0.5])
-        factorisations[krylov], whole[budget] = len(made), set(borders)
-    reference = runs[False, finite.COLUMNS_MAX_BYTES]
-    for key in ((True, 0), (True, rows_only), (True, finite.COLUMNS_MAX_BYTES)):
+        runs[krylov, budget, gmres] = fc.indent(ind, [0.25, 0.5])
+        factorisations[krylov, gmres], whole[budget], single[gmres] = list(made), set(borders), fc.single
+    assert not single[0] and factorisations[True, 0][:2] == [True, False]     # refactorised in double
+    reference = runs[False, finite.COLUMNS_MAX_BYTES, 12]
+    for key in runs:
         for a, b in zip(reference, runs[key]):
             assert b.force_N == pytest.approx(a.force_N, rel=1e-7)
             assert b.energy_Nmm == pytest.approx(a.energy_Nmm, rel=1e-7)
-    assert factorisations[True] < factorisations[False]
+    assert set(factorisations[True, 12]) == {True} and set(factorisations[False, 12]) == {False}
+    assert len(factorisations[True, 12]) < len(factorisations[False, 12])
     assert whole[0] == {False} and False in whole[rows_only] and whole[finite.COLUMNS_MAX_BYTES] == {True}
 
-    # one step at the last state, on the factorisation of the state before (fc still holds it)
-    r = runs[True, finite.COLUMNS_MAX_BYTES][-1]
+    # one step at the last state, on the (single-precision) factorisation of the state before (fc holds it)
+    r = runs[True, finite.COLUMNS_MAX_BYTES, 12][-1]
     surf = finite.RigidSurface(ind)
     travel = float(ind.standoff(fc.X).min()) + r.depth_mm
     g, n, curv, straight = surf.distance(fc._positions(r.u), travel + 0.05)
@@ -444,9 +480,10 @@ def test_newton_krylov_steps_give_the_factorised_answer_with_fewer_factorisation
                       shape=(len(act), model.ndof))[:, fc.free]
     rhs = -f[fc.free]
     monkeypatch.setattr(finite, "KRYLOV_MAX", 30)     # an aged factorisation: 20 iterations measured
-    du, lam, its = fc._krylov(K, G, C, rhs, g[act], act, 1e-7 * np.linalg.norm(rhs))
+    du, lam, its = fc._krylov(fc._tangent(K, G), C, rhs, g[act], act, 1e-7 * np.linalg.norm(rhs))
     assert its > 0
-    direct_du, direct_lam = fc._solve(K, G, C, rhs, g[act], act)
+    fc.single = False                                 # the direct solve on a double-precision factorisation
+    direct_du, direct_lam = fc._solve(K, G, C, rhs, g[act], act, 0.0)
     np.testing.assert_allclose(C @ du, -g[act], atol=1e-12)
     assert np.abs(du - direct_du).max() < 1e-6 * np.abs(direct_du).max()
     np.testing.assert_allclose(lam, direct_lam, rtol=1e-6, atol=1e-9 * np.abs(direct_lam).max())

@@ -351,6 +351,33 @@ def test_saddle_factor_reuses_the_analysis_when_entries_cancel():
     np.testing.assert_allclose(second(b), np.linalg.solve(Kc, b), rtol=1e-10)
 
 
+def test_single_precision_solves_to_its_precision_and_keeps_its_own_analysis():
+    """A single-precision factorisation (iparm[27] = 1) solves the saddle system to float32's
+    accuracy (the condition number here is about 100: within 1e-4, and not to 1e-9, so it did run
+    in float32), returns float64, is reused by single-precision factorisations only, and refuses a
+    Schur complement."""
+    pytest.importorskip("pypardiso")
+    K, B, D, A = _saddle(seed=11)
+    upper = sp.triu(A, format="csr")
+    single = Pardiso(upper, single=True)
+    b = np.random.default_rng(12).standard_normal((A.shape[0], 2))
+    x = np.linalg.solve(A.toarray(), b)
+    y = single.solve(b)
+    assert single.single and y.dtype == np.float64 and y.shape == b.shape
+    error = np.abs(y - x).max() / np.abs(x).max()
+    assert 1e-9 < error < 1e-4
+    assert not Pardiso(upper).takes(single) and not single.takes(Pardiso(upper))
+    again = Pardiso(upper, single=True, reuse=single)           # the same pattern and precision
+    assert not single._live and np.abs(again.solve(b) - x).max() < 1e-4 * np.abs(x).max()
+    with pytest.raises(ValueError):
+        Pardiso(upper, schur=np.array([1, 2]), single=True)
+    factor = SaddleFactor(K, B, D, single=True)
+    Kc = (K + B.T @ sp.diags(1 / D) @ B).toarray()
+    assert factor.single and not SaddleFactor(K, B, D).single
+    np.testing.assert_allclose(factor(b[:K.shape[0], 0], refine=False), np.linalg.solve(Kc, b[:K.shape[0], 0]),
+                               rtol=1e-4, atol=1e-4 * np.abs(np.linalg.solve(Kc, b[:K.shape[0], 0])).max())
+
+
 def test_interruptible_call_hands_ctrl_c_to_the_caller_at_once():
     """A long call that releases Python's lock runs in its own thread: Ctrl-C (here simulated with
     _thread.interrupt_main) reaches the waiting caller within a few WAIT_S, not when the call
