@@ -170,6 +170,31 @@ def test_factorisations_leave_the_environment_unchanged():
     assert dict(os.environ) == before
 
 
+def test_pardiso_runs_in_mkls_reproducible_mode():
+    """Once PARDISO has run, MKL is in its reproducible mode (`fem.core.linalg._mkl_pardiso`):
+    without it a factorisation on two threads that reuses an analysis gave other last bits from
+    run to run. A 3D Laplacian above SERIAL_PARDISO_BELOW (two threads), refactorised on its
+    analysis in single and double precision, solves to the same bits twice."""
+    pytest.importorskip("pypardiso")
+    from fem.core.linalg import SERIAL_PARDISO_BELOW, mkl_reproducible
+    n = 30
+    line = sp.diags([-np.ones(n - 1), 2 * np.ones(n), -np.ones(n - 1)], [-1, 0, 1])
+    eye = sp.eye(n)
+    A = (sp.kron(sp.kron(line, eye), eye) + sp.kron(sp.kron(eye, line), eye) + sp.kron(sp.kron(eye, eye), line)).tocsr()
+    assert A.shape[0] > SERIAL_PARDISO_BELOW
+    b = np.random.default_rng(13).standard_normal(A.shape[0])
+    for single in (False, True):
+        solutions = []
+        for _ in range(2):
+            first = Pardiso(sp.triu(A, format="csr"), single=single)
+            again = Pardiso(sp.triu(A + sp.diags(np.linspace(0.1, 0.2, A.shape[0])), format="csr"), single=single,
+                            reuse=first)
+            solutions.append(again.solve(b))
+            again.release()
+        assert np.array_equal(*solutions)
+    assert mkl_reproducible()
+
+
 def test_blas_threads_limits_and_restores():
     from threadpoolctl import threadpool_info
 
