@@ -31,6 +31,7 @@ radius (the outermost node carrying force: it moves in steps of the node spacing
 
     pip install ngsolve
     python benchmarks/ngsolve_sphere.py [--sizes 0.25 0.125] [--maxh 0.2] [--no-write]
+    python benchmarks/ngsolve_sphere.py --linear --sizes 0.25      # the small-strain baselines
 
 Prints per depth both forces [N], their ratio, the contact radii and the run times, and writes
 benchmarks/results/ngsolve_sphere.md.
@@ -61,6 +62,8 @@ NU = 0.48
 FINE_MM = 1.8
 MAXH_FINE_MM = 0.2
 MAXH_MM = 1.5
+HELD = {"bottom": 0.0, "symx": (0.0, None, None), "symz": (None, None, 0.0)}
+"""This project's held regions of the quarter block: the bottom, and the symmetry planes' normal."""
 
 
 def lame(E: float, nu: float) -> tuple[float, float]:
@@ -136,11 +139,53 @@ def ngsolve_results(mu: float, lam: float, depths, maxh_fine_mm: float = MAXH_FI
     return np.array(forces), np.array(pens), time.perf_counter() - t0, fes.ndof
 
 
-def project_results(size_mm: float, depths):
-    """(force (n,) N of the whole block, contact radius (n,) mm, seconds, DOFs) from
-    `fem.contact.finite.FiniteContact` on the quarter block, size_mm under the contact."""
-    from fem.contact.finite import FiniteContact
+def ngsolve_linear(mu: float, lam: float, depths, maxh_fine_mm: float = MAXH_FINE_MM, inverse: str = "umfpack"):
+    """(force (n,) N of the whole block, seconds) from NGSolve in small strain: linear elasticity
+    on the same mesh and P2 space, the gap along the approach to the sphere's true surface over
+    the undeformed point (as `fem.contact.linear`), the same penalty; the small-strain baseline of
+    `ngsolve_results`."""
+    import ngsolve as ng
+
+    t0 = time.perf_counter()
+    mesh = _quarter_mesh(maxh_fine_mm)
+    fes = ng.VectorH1(mesh, order=2, dirichlet="bottom", dirichletx="symx", dirichletz="symz")
+    u = fes.TrialFunction()
+    eps = ng.Sym(ng.Grad(u))
+    centre = ng.Parameter(RADIUS_MM)
+    r2 = RADIUS_MM ** 2 - ng.x * ng.x - ng.z * ng.z
+    gap = ng.IfPos(r2, centre - ng.sqrt(ng.IfPos(r2, r2, 0.0)) - ng.y - u[1], 1.0)   # open outside the footprint
+    kpen = ng.Parameter(PENALTY_MPA_PER_MM)
+    penalty = ng.Variation(0.5 * kpen * ng.IfPos(-gap, gap * gap, 0.0) * ng.ds("top"))
+    a = ng.BilinearForm(fes, symmetric=True)
+    a += ng.Variation((mu * ng.InnerProduct(eps, eps) + lam / 2 * ng.Trace(eps) ** 2) * ng.dx)
+    a += penalty
+    contact = ng.BilinearForm(fes, symmetric=True)
+    contact += penalty
+    gf, frozen = ng.GridFunction(fes), ng.GridFunction(fes)
+    grad = gf.vec.CreateVector()
+    down = ng.GridFunction(fes)
+    down.Set(ng.CoefficientFunction((0.0, 1.0, 0.0)))
+    forces = []
+    for d in depths:
+        centre.Set(RADIUS_MM - d)
+        solve_penalised(a, gf, frozen, fes, kpen, f"depth {d:.3g} mm", inverse)
+        contact.Apply(gf.vec, grad)
+        forces.append(4 * float(ng.InnerProduct(grad, down.vec)))
+    return np.array(forces), time.perf_counter() - t0
+
+
+def project_linear(size_mm: float, depths) -> np.ndarray:
+    """(n,) this project's small-strain force [N] of the whole block (`fem.contact.linear`)."""
     from fem.contact.indentors import make_indentor
+    from fem.contact.linear import ContactModel
+
+    model = _project_block(size_mm)
+    cm = ContactModel.from_fe(model, model.system(HELD), "top")
+    return np.array([4 * cm.indent(make_indentor(f"sphere:{RADIUS_MM:g}"), depth_mm=d).total_force_N for d in depths])
+
+
+def _project_block(size_mm: float):
+    """This project's Model of the quarter block, structured and graded, size_mm under the contact."""
     from fem.core.model import Model
     from fem.verify.closed_forms import box, fine_then_growing
 
@@ -148,9 +193,18 @@ def project_results(size_mm: float, depths):
     ys = -fine_then_growing(size_mm, FINE_MM, 1.5, BLOCK_MM)[::-1]
     p, cells, reg = box(xs, ys, xs)
     regions = {"top": reg["ymax"], "bottom": reg["ymin"], "symx": reg["xmin"], "symz": reg["zmin"]}
-    model = Model(p, cells, np.ones(len(cells), int), regions, material=[E_MPA], nu=NU)
+    return Model(p, cells, np.ones(len(cells), int), regions, material=[E_MPA], nu=NU)
+
+
+def project_results(size_mm: float, depths):
+    """(force (n,) N of the whole block, contact radius (n,) mm, seconds, DOFs) from
+    `fem.contact.finite.FiniteContact` on the quarter block, size_mm under the contact."""
+    from fem.contact.finite import FiniteContact
+    from fem.contact.indentors import make_indentor
+
+    model = _project_block(size_mm)
     t0 = time.perf_counter()
-    fc = FiniteContact(model, "top", {"bottom": 0.0, "symx": (0.0, None, None), "symz": (None, None, 0.0)})
+    fc = FiniteContact(model, "top", HELD)
     res = fc.indent(make_indentor(f"sphere:{RADIUS_MM:g}"), depths)
     seconds = time.perf_counter() - t0
     x = fc.sn.x
@@ -164,8 +218,19 @@ def main():
     ap.add_argument("--maxh", type=float, default=MAXH_FINE_MM, help="NGSolve's mesh size under the sphere, mm")
     ap.add_argument("--inverse", default="umfpack", help="NGSolve's sparse direct solver")
     ap.add_argument("--no-write", action="store_true")
+    ap.add_argument("--linear", action="store_true",
+                    help="the small-strain baselines instead: NGSolve's and this project's linear forces (printed only)")
     args = ap.parse_args()
     mu, lam = lame(E_MPA, NU)
+    if args.linear:
+        ref, seconds = ngsolve_linear(mu, lam, DEPTHS_MM, args.maxh, args.inverse)
+        ours = {s: project_linear(s, DEPTHS_MM) for s in args.sizes}
+        print("| depth mm | NGSolve linear N | " + " | ".join(f"this project {s:g} mm N | / NGSolve - 1" for s in ours) + " |")
+        for i, d in enumerate(DEPTHS_MM):
+            print(f"| {d:.2f} | {ref[i]:.6g} | " + " | ".join(f"{f[i]:.6g} | {100 * (f[i] / ref[i] - 1):+.2f} %"
+                                                            for f in ours.values()) + " |")
+        print(f"NGSolve small strain: maxh {args.maxh:g} mm, {seconds:.0f} s")
+        return
     ours = []
     for s in args.sizes:
         ours.append(project_results(s, DEPTHS_MM))
