@@ -30,8 +30,8 @@ Newton-Krylov step), and factorises only when that does not reach ETA of the res
 KRYLOV_MAX iterations. In 3D the factorisations are in single precision (`fem.core.linalg.Pardiso`,
 PARDISO's iparm[27] = 1: half the factorisation's time and memory, faster solves) and every
 iteration, chord steps and those right after a factorisation too, is solved by GMRES on it: a
-single-precision solve of the layered fingertip is accurate to about 1e-3, well inside ETA, so
-those take 0-1 GMRES iterations; a factorisation GMRES cannot use is redone in double precision
+single-precision solve leaves a relative residual of 6e-4 to 1.2e-3 (the 1 mm monkey's tangent,
+random loads; the solution within 9e-5), well inside ETA, so those take 0-1 GMRES iterations; a factorisation GMRES cannot use is redone in double precision
 for the rest of the run (in 2D, with a factorisation per iteration costing about a solve, double
 precision throughout). It stops when the active set
 is stable, the free residual is below `tol` of the contact force (1e-8: the solves skip iterative
