@@ -92,19 +92,51 @@ def _quarter_mesh(maxh_fine_mm: float):
     return ng.Mesh(OCCGeometry(shape).GenerateMesh(maxh=MAXH_MM, grading=0.25))
 
 
+def _space(maxh_fine_mm: float):
+    """(NGSolve mesh of the quarter block, its P2 displacement space held at the bottom and normal
+    to the symmetry planes, the sphere centre's height: an ng.Parameter, R - depth)."""
+    import ngsolve as ng
+
+    mesh = _quarter_mesh(maxh_fine_mm)
+    fes = ng.VectorH1(mesh, order=2, dirichlet="bottom", dirichletx="symx", dirichletz="symz")
+    return mesh, fes, ng.Parameter(RADIUS_MM)
+
+
+def _penalised(fes, energy, gap):
+    """(the energy density `energy` [MPa] of the block plus a penalty max(0, -gap)^2 / 2 on the top,
+    as an ng.BilinearForm; the penalty's ng.Parameter; force(gf) -> the contact force of the whole
+    block [N]: the penalty's gradient applied to a unit translation along the approach, at the
+    solve's own quadrature points)."""
+    import ngsolve as ng
+
+    kpen = ng.Parameter(PENALTY_MPA_PER_MM)
+    penalty = ng.Variation(0.5 * kpen * ng.IfPos(-gap, gap * gap, 0.0) * ng.ds("top"))
+    a = ng.BilinearForm(fes, symmetric=True)
+    a += ng.Variation(energy * ng.dx)
+    a += penalty
+    contact = ng.BilinearForm(fes, symmetric=True)       # the penalty alone: its gradient is the contact force
+    contact += penalty
+    down = ng.GridFunction(fes)                           # the unit translation along y in the basis: with
+    down.Set(ng.CoefficientFunction((0.0, 1.0, 0.0)))    # hierarchical P2, 1 on vertices, 0 on edges
+
+    def force(gf) -> float:
+        grad = gf.vec.CreateVector()
+        contact.Apply(gf.vec, grad)
+        return 4 * float(ng.InnerProduct(grad, down.vec))
+    return a, kpen, force
+
+
 def ngsolve_results(mu: float, lam: float, depths, maxh_fine_mm: float = MAXH_FINE_MM, inverse: str = "umfpack"):
     """(force (n,) N of the whole block, largest penetration (n,) mm, seconds, DOFs) from NGSolve
     (module docstring)."""
     import ngsolve as ng
 
     t0 = time.perf_counter()
-    mesh = _quarter_mesh(maxh_fine_mm)
-    fes = ng.VectorH1(mesh, order=2, dirichlet="bottom", dirichletx="symx", dirichletz="symz")
+    mesh, fes, centre = _space(maxh_fine_mm)
     u = fes.TrialFunction()
     F = ng.Id(3) + ng.Grad(u)
     J = ng.Det(F)
     kappa = lam + 2 * mu / 3
-    centre = ng.Parameter(RADIUS_MM)                      # the sphere centre's height: R - depth
     X = ng.CoefficientFunction((ng.x, ng.y, ng.z))
     c = ng.CoefficientFunction((0.0, centre, 0.0))
     gf = ng.GridFunction(fes)
@@ -112,16 +144,8 @@ def ngsolve_results(mu: float, lam: float, depths, maxh_fine_mm: float = MAXH_FI
     r_frozen = X + frozen - c
     normal = r_frozen / ng.sqrt(ng.InnerProduct(r_frozen, r_frozen))
     gap = ng.InnerProduct(X + u - c, normal) - RADIUS_MM  # affine in u: a convex penalty
-    kpen = ng.Parameter(PENALTY_MPA_PER_MM)
-    penalty = ng.Variation(0.5 * kpen * ng.IfPos(-gap, gap * gap, 0.0) * ng.ds("top"))
-    a = ng.BilinearForm(fes, symmetric=True)
-    a += ng.Variation((mu / 2 * (J ** (-2 / 3) * ng.InnerProduct(F, F) - 3) + kappa / 2 * (J - 1) ** 2) * ng.dx)
-    a += penalty
-    contact = ng.BilinearForm(fes, symmetric=True)       # the penalty alone: its gradient is the contact force
-    contact += penalty
-    grad = gf.vec.CreateVector()
-    down = ng.GridFunction(fes)                           # the unit translation along y in the basis: with
-    down.Set(ng.CoefficientFunction((0.0, 1.0, 0.0)))    # hierarchical P2, 1 on vertices, 0 on edges
+    a, kpen, force = _penalised(fes, mu / 2 * (J ** (-2 / 3) * ng.InnerProduct(F, F) - 3) + kappa / 2 * (J - 1) ** 2,
+                                gap)
     rg = X + gf - c
     inside = RADIUS_MM - ng.sqrt(ng.InnerProduct(rg, rg))
     pen = ng.IfPos(inside, inside, 0.0)
@@ -132,8 +156,7 @@ def ngsolve_results(mu: float, lam: float, depths, maxh_fine_mm: float = MAXH_FI
             depth = min(target, depth + STEP_MM)
             centre.Set(RADIUS_MM - depth)
             solve_penalised(a, gf, frozen, fes, kpen, f"depth {depth:.3g} mm", inverse)
-        contact.Apply(gf.vec, grad)                     # at the solve's own quadrature points
-        forces.append(4 * float(ng.InnerProduct(grad, down.vec)))
+        forces.append(force(gf))
         g = np.array([pen(mesh(float(x), 0.0, float(z), VOL_or_BND=ng.BND)) for x in xs for z in xs]).ravel()
         pens.append(float(g.max(initial=0.0)))
     return np.array(forces), np.array(pens), time.perf_counter() - t0, fes.ndof
@@ -147,30 +170,18 @@ def ngsolve_linear(mu: float, lam: float, depths, maxh_fine_mm: float = MAXH_FIN
     import ngsolve as ng
 
     t0 = time.perf_counter()
-    mesh = _quarter_mesh(maxh_fine_mm)
-    fes = ng.VectorH1(mesh, order=2, dirichlet="bottom", dirichletx="symx", dirichletz="symz")
+    _, fes, centre = _space(maxh_fine_mm)
     u = fes.TrialFunction()
     eps = ng.Sym(ng.Grad(u))
-    centre = ng.Parameter(RADIUS_MM)
     r2 = RADIUS_MM ** 2 - ng.x * ng.x - ng.z * ng.z
     gap = ng.IfPos(r2, centre - ng.sqrt(ng.IfPos(r2, r2, 0.0)) - ng.y - u[1], 1.0)   # open outside the footprint
-    kpen = ng.Parameter(PENALTY_MPA_PER_MM)
-    penalty = ng.Variation(0.5 * kpen * ng.IfPos(-gap, gap * gap, 0.0) * ng.ds("top"))
-    a = ng.BilinearForm(fes, symmetric=True)
-    a += ng.Variation((mu * ng.InnerProduct(eps, eps) + lam / 2 * ng.Trace(eps) ** 2) * ng.dx)
-    a += penalty
-    contact = ng.BilinearForm(fes, symmetric=True)
-    contact += penalty
+    a, kpen, force = _penalised(fes, mu * ng.InnerProduct(eps, eps) + lam / 2 * ng.Trace(eps) ** 2, gap)
     gf, frozen = ng.GridFunction(fes), ng.GridFunction(fes)
-    grad = gf.vec.CreateVector()
-    down = ng.GridFunction(fes)
-    down.Set(ng.CoefficientFunction((0.0, 1.0, 0.0)))
     forces = []
     for d in depths:
         centre.Set(RADIUS_MM - d)
         solve_penalised(a, gf, frozen, fes, kpen, f"depth {d:.3g} mm", inverse)
-        contact.Apply(gf.vec, grad)
-        forces.append(4 * float(ng.InnerProduct(grad, down.vec)))
+        forces.append(force(gf))
     return np.array(forces), time.perf_counter() - t0
 
 

@@ -31,9 +31,9 @@ KRYLOV_MAX iterations. In 3D the factorisations are in single precision (`fem.co
 PARDISO's iparm[27] = 1: half the factorisation's time and memory, faster solves) and every
 iteration, chord steps and those right after a factorisation too, is solved by GMRES on it: a
 single-precision solve leaves a relative residual of 6e-4 to 1.2e-3 (the 1 mm monkey's tangent,
-random loads; the solution within 9e-5), well inside ETA, so those take 0-1 GMRES iterations; a factorisation GMRES cannot use is redone in double precision
-for the rest of the run (in 2D, with a factorisation per iteration costing about a solve, double
-precision throughout). It stops when the active set
+random loads; the solution within 9e-5), well inside ETA, so those take 0-1 GMRES iterations. A
+factorisation GMRES cannot use is redone in double precision for the rest of the run (in 2D,
+where a factorisation costs about a solve, double precision throughout). It stops when the active set
 is stable, the free residual is below `tol` of the contact force (1e-8: the solves skip iterative
 refinement, so the last iterations converge linearly, and each further digit of the residual costs
 about one more tangent while the force is settled to 9-10 digits) and every gap is within GAP_TOL_MM,

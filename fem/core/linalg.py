@@ -152,17 +152,28 @@ _PT = ctypes.c_int64 if ctypes.sizeof(ctypes.c_void_p) == 8 else ctypes.c_int32 
 _I32 = ctypes.POINTER(ctypes.c_int32)
 _F64 = ctypes.POINTER(ctypes.c_double)
 MKL_CBWR_AUTO = 2           # MKL_CBWR_Set's mode: the same bits on the same instruction set and threads
+MKL_CBWR_BRANCH = 1         # MKL_CBWR_Get's query: the code branch (mode) in use
+
+
+@functools.lru_cache(maxsize=1)
+def _libmkl():
+    """The MKL library (ctypes) pypardiso loaded, found once per process: pypardiso finds libmkl_rt
+    when a PyPardisoSolver is built (without find_library's help by a recursive glob over the
+    environment, every time), so the one its import-time solver loaded is used."""
+    try:                                            # the solver pypardiso built on import
+        from pypardiso.scipy_aliases import pypardiso_solver as solver
+    except ImportError:                             # (a new one searches the environment again)
+        from pypardiso import PyPardisoSolver
+
+        solver = PyPardisoSolver()
+    return solver.libmkl
 
 
 @functools.lru_cache(maxsize=1)
 def _mkl_pardiso():
-    """(MKL's `pardiso`, MKL's `MKL_Set_Num_Threads_Local`) as ctypes functions, located once per
-    process.
-
-    pypardiso finds libmkl_rt when a PyPardisoSolver is built (without find_library's help by a
-    recursive glob over the environment, every time); the library its import-time solver loaded
-    is used and its `pardiso` symbol wrapped here, as a function object of this module's own (no
-    environment variable or pypardiso state is changed).
+    """(MKL's `pardiso`, MKL's `MKL_Set_Num_Threads_Local`) as ctypes functions of this module's own
+    (indexing the library gives new function objects: no environment variable or pypardiso state
+    is changed), located once per process.
 
     MKL's conditional numerical reproducibility is switched on here, before the first PARDISO call
     (`MKL_CBWR_Set(MKL_CBWR_AUTO)`): without it a factorisation on two threads that reuses an
@@ -171,19 +182,14 @@ def _mkl_pardiso():
     receptor tables differed in the 9th digit between runs of one command). With it, the same
     command on the same thread count writes the same bytes, at about 10 % of the 3D finite
     solver's time (the 1 mm monkey, 46.7 s against 42.6 s in process)."""
-    try:                                            # the solver pypardiso built on import
-        from pypardiso.scipy_aliases import pypardiso_solver as solver
-    except ImportError:                             # (a new one searches the environment again)
-        from pypardiso import PyPardisoSolver
-
-        solver = PyPardisoSolver()
-    fn = solver.libmkl["pardiso"]                   # indexing gives a new function object
+    lib = _libmkl()
+    fn = lib["pardiso"]
     fn.argtypes = [ctypes.POINTER(_PT), _I32, _I32, _I32, _I32, _I32, ctypes.c_void_p, _I32, _I32, _I32,
                    _I32, _I32, _I32, ctypes.c_void_p, ctypes.c_void_p, _I32]
     fn.restype = None
-    threads = solver.libmkl["MKL_Set_Num_Threads_Local"]
+    threads = lib["MKL_Set_Num_Threads_Local"]
     threads.argtypes, threads.restype = [ctypes.c_int], ctypes.c_int
-    reproducible = solver.libmkl["MKL_CBWR_Set"]
+    reproducible = lib["MKL_CBWR_Set"]
     reproducible.argtypes, reproducible.restype = [ctypes.c_int], ctypes.c_int
     if reproducible(MKL_CBWR_AUTO) != 0:
         logger.warning("MKL refused its reproducible mode: repeated runs may differ in the last bits")
@@ -193,11 +199,9 @@ def _mkl_pardiso():
 def mkl_reproducible() -> bool:
     """Whether MKL runs in its conditional numerical reproducibility mode (`_mkl_pardiso` sets it
     before the first PARDISO call)."""
-    from pypardiso.scipy_aliases import pypardiso_solver as solver
-
-    get = solver.libmkl["MKL_CBWR_Get"]
+    get = _libmkl()["MKL_CBWR_Get"]
     get.argtypes, get.restype = [ctypes.c_int], ctypes.c_int
-    return get(1) == MKL_CBWR_AUTO              # 1: MKL_CBWR_BRANCH, the code branch in use
+    return get(MKL_CBWR_BRANCH) == MKL_CBWR_AUTO
 
 
 class Pardiso:
@@ -220,8 +224,8 @@ class Pardiso:
     np.linalg.LinAlgError for an empty row or an S that is not positive definite.
     single: factorise and solve in single precision (iparm[27] = 1; the matrix, right-hand sides
     and solutions in float32, solutions returned as float64): half the factorisation's time and
-    memory and faster solves, at a relative error of about 1e-3 on the layered fingertip (a
-    preconditioner, not a solver there; no Schur complement then).
+    memory and faster solves, leaving a relative residual of about 1e-3 on the fingertip's
+    neo-Hookean tangent (a preconditioner, not a solver there; no Schur complement then).
     reuse: an earlier factorisation of a matrix with the same pattern (`takes`): its analysis (the
     ordering and symbolic factor, a quarter of a factorisation's time on the 1 mm monkey's
     neo-Hookean tangent) serves this one, which takes over its handle; for another pattern, `reuse`
