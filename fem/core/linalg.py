@@ -33,6 +33,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
+from fem.core.longcalls import interruptible
 from fem.core.patterns import Gather, drop_round_off, onto_pattern
 from fingertip.errors import InputError
 
@@ -95,45 +96,18 @@ def dense_threads(n: int):
 
 
 SERIAL_PARDISO_BELOW = 25_000
-"""PARDISO runs every phase of a matrix with fewer unknowns on one thread (MKL's thread count local
-to the calling thread, the same for all phases of one factorisation). Measured on 2 cores, whole
-runs: the 2D finite Newton on 12,648 unknowns (cylinder with bone, 0.125 mm, C5 to 2 mm, 115
-factorisations) 10.1-10.8 s on one thread against 14.2-15.3 s on two, where MKL's OpenMP threads
-spin after each short call and take the core the Python side needs; on 44,918 unknowns (0.0625 mm)
-39.7 s against 36.9 s; a 3D linear run on 70,629 unknowns 7.2-7.6 s against 5.2-5.9 s (forces
-equal in the 8-10 digits printed). The count depends on the matrix alone, so a run gives the same
-bytes on every scheduler."""
-
-
-# --------------------------------------------------------------------------- interruptible calls
-WAIT_S = 0.1
-"""Seconds between checks for Ctrl-C while a long library call runs in its own thread."""
-
-
-def interruptible(call, *args):
-    """call(*args) in a daemon thread while this thread waits in WAIT_S joins, so that Ctrl-C
-    (KeyboardInterrupt, which Python delivers to the main thread between bytecodes) acts within
-    a fraction of a second during a long call that releases Python's lock (a PARDISO
-    factorisation, a dense LAPACK factorisation), instead of when it returns. The abandoned call
-    finishes (or is ended with the process) in its thread; its result is dropped. Off the main
-    thread, where no KeyboardInterrupt arrives, call runs here."""
-    if threading.current_thread() is not threading.main_thread():
-        return call(*args)
-    box = {}
-
-    def run():
-        try:
-            box["value"] = call(*args)
-        except BaseException as exc:  # noqa: BLE001 - handed to the waiting thread
-            box["error"] = exc
-
-    worker = threading.Thread(target=run, name=f"interruptible {getattr(call, '__name__', 'call')}", daemon=True)
-    worker.start()
-    while worker.is_alive():
-        worker.join(WAIT_S)
-    if "error" in box:
-        raise box["error"]
-    return box.get("value")
+"""PARDISO runs every phase of a matrix with fewer unknowns on one thread when called from the main
+thread (MKL's thread count local to it, set around each call; such phases take a second or less
+and run there, not in the long-call thread). Measured on 2 cores, whole runs: the 2D finite Newton
+on 12,648 unknowns (cylinder with bone, 0.125 mm, C5 to 2 mm, 115 factorisations) 10.1-10.8 s on
+one thread against 14.2-15.3 s on two, where MKL's OpenMP threads spin after each short call and
+take the core the Python side needs; on 44,918 unknowns (0.0625 mm) 39.7 s against 36.9 s; a 3D
+linear run on 70,629 unknowns 7.2-7.6 s against 5.2-5.9 s (forces equal in the 8-10 digits
+printed). Off the main thread (the long-call thread, a caller's own threads) MKL keeps its own
+count: a count of one set there, with MKL's reproducible mode on, crashed PARDISO's analysis with
+a segmentation fault (the 2D cylinder models' Schur factorisations in a loop, 2,100 per run: 15 of
+21 runs, in a new thread per call or in the long-call thread; none of 4 with every call on the
+main thread, none of 6 with MKL's own count in the long-call thread, none of 4 without the mode)."""
 
 
 # --------------------------------------------------------------------------- PARDISO
@@ -285,8 +259,8 @@ class Pardiso:
             self._perm[schur] = 1
             self._rows = np.asarray(schur)
             S = np.zeros((len(schur), len(schur)), order="F")     # symmetric: either order
-            self._long_phase(11, np.zeros(1), np.zeros(1), 1)
-            self._long_phase(22, np.zeros(1), S, 1)
+            self._long_phase(11, *self._empty())
+            self._long_phase(22, self._empty()[0], S, 1)
             with dense_threads(len(S)):
                 self._schur_factor = interruptible(functools.partial(sla.cho_factor, S, lower=True, overwrite_a=True))
         self.nnz_factor = int(ip[17])
@@ -320,7 +294,10 @@ class Pardiso:
     def _long_phase(self, phase, b, x, nrhs):
         """A phase that takes long (analysis, factorisation) run `interruptible`: Ctrl-C acts at
         once. An interrupted factorisation is abandoned: its memory is not released (the call still
-        runs in its thread; releasing under it would crash), the process ends soon after."""
+        runs in its thread; releasing under it would crash), the process ends soon after. Below
+        SERIAL_PARDISO_BELOW unknowns (a second or less) the phase runs here (`_phase`)."""
+        if self.n < SERIAL_PARDISO_BELOW:
+            return self._phase(phase, b, x, nrhs)
         try:
             interruptible(self._phase, phase, b, x, nrhs)
         except KeyboardInterrupt:
@@ -329,7 +306,8 @@ class Pardiso:
 
     def _phase(self, phase, b, x, nrhs):
         err = ctypes.c_int32(0)
-        before = self._threads(1 if self.n < SERIAL_PARDISO_BELOW else 0)     # 0: MKL's own setting
+        serial = self.n < SERIAL_PARDISO_BELOW and threading.current_thread() is threading.main_thread()
+        before = self._threads(1) if serial else None
         try:
             self._call(self._pt.ctypes.data_as(ctypes.POINTER(_PT)), ctypes.byref(ctypes.c_int32(1)),
                        ctypes.byref(ctypes.c_int32(1)), ctypes.byref(ctypes.c_int32(-2)),
@@ -339,7 +317,8 @@ class Pardiso:
                        self.iparm.ctypes.data_as(_I32), ctypes.byref(ctypes.c_int32(0)),
                        b.ctypes.data_as(_F64), x.ctypes.data_as(_F64), ctypes.byref(err))
         finally:
-            self._threads(before)
+            if serial:
+                self._threads(before)
         if err.value != 0:
             raise self._error(err.value)
 

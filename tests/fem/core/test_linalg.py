@@ -1,6 +1,7 @@
 """fem.core.linalg: PARDISO's Schur complement and Schur-path solves against dense linear algebra,
 the refined saddle solve, BLAS thread limits, and no environment changes."""
 import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -404,15 +405,15 @@ def test_single_precision_solves_to_its_precision_and_keeps_its_own_analysis():
 
 
 def test_interruptible_call_hands_ctrl_c_to_the_caller_at_once():
-    """A long call that releases Python's lock runs in its own thread: Ctrl-C (here simulated with
-    _thread.interrupt_main) reaches the waiting caller within a few WAIT_S, not when the call
-    returns; a result or an error of a call that ends comes back as from a direct call."""
+    """A long call that releases Python's lock runs in the long-call thread: Ctrl-C (here
+    simulated with _thread.interrupt_main) reaches the waiting caller within a few WAIT_S, not when
+    the call returns; a result or an error of a call that ends comes back as from a direct call."""
     import _thread
     import signal
     import threading
     import time
 
-    from fem.core.linalg import WAIT_S, interruptible
+    from fem.core.longcalls import WAIT_S, interruptible
 
     assert interruptible(sum, [1, 2, 3]) == 6
     with pytest.raises(ZeroDivisionError):
@@ -423,7 +424,59 @@ def test_interruptible_call_hands_ctrl_c_to_the_caller_at_once():
         timer.start()
         t0 = time.perf_counter()
         with pytest.raises(KeyboardInterrupt):
-            interruptible(time.sleep, 5.0)                   # stands in for a PARDISO factorisation
+            interruptible(time.sleep, 1.0)                   # stands in for a PARDISO factorisation
         assert time.perf_counter() - t0 < 0.2 + 3 * WAIT_S
+        assert interruptible(sum, [4, 5]) == 9              # after the abandoned call ends
     finally:
         signal.signal(signal.SIGINT, previous)
+
+
+@pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="reads the thread count from /proc")
+def test_factorisations_leave_no_threads_behind():
+    """Long PARDISO phases run on one thread for the life of the process (`interruptible`): MKL's
+    OpenMP runtime keeps a team of threads for every thread that calls it in parallel, so a thread
+    per call left one more OS thread behind per factorisation (103 after 100)."""
+    from fem.core.linalg import SERIAL_PARDISO_BELOW
+
+    def os_threads() -> int:
+        status = Path("/proc/self/status").read_text()
+        return int(next(line.split()[1] for line in status.splitlines() if line.startswith("Threads:")))
+
+    m = 30                                             # 27,000 unknowns: factorised on MKL's threads
+    assert m ** 3 >= SERIAL_PARDISO_BELOW
+    T = sp.diags([-np.ones(m - 1), 2.2 * np.ones(m), -np.ones(m - 1)], [-1, 0, 1])
+    eye = sp.eye(m)
+    upper = sp.triu(sp.kron(sp.kron(T, eye), eye) + sp.kron(sp.kron(eye, T), eye) + sp.kron(sp.kron(eye, eye), T),
+                    format="csr")
+    Pardiso(upper).release()
+    before = os_threads()
+    for _ in range(20):
+        Pardiso(upper).release()
+    assert os_threads() <= before
+
+
+def test_one_thread_for_small_matrices_is_set_on_the_main_thread_only():
+    """A small matrix's phases run on the calling thread; MKL's thread count is set to one there
+    only on the main thread. (Set in another thread, with MKL's reproducible mode on, it crashed
+    PARDISO's Schur analysis now and then: `SERIAL_PARDISO_BELOW`.)"""
+    import threading
+
+    A = sp.diags([-np.ones(99), 2.5 * np.ones(100), -np.ones(99)], [-1, 0, 1])
+    factor = Pardiso(sp.triu(A, format="csr"))
+    counts, threads = [], factor._threads
+
+    def spy(k):
+        counts.append((threading.current_thread().name, k))
+        return threads(k)
+
+    factor._threads = spy
+    b = np.ones(100)
+    x = factor.solve(b)
+    assert counts[0] == (threading.main_thread().name, 1) and len(counts) == 2      # set, then restored
+    counts.clear()
+    got = []
+    elsewhere = threading.Thread(target=lambda: got.append(factor.solve(b)), name="caller")
+    elsewhere.start()
+    elsewhere.join()
+    assert counts == [] and np.array_equal(got[0], x)
+    np.testing.assert_allclose(A @ x, b, rtol=1e-12)
