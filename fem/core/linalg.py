@@ -259,8 +259,9 @@ class Pardiso:
             self._perm[schur] = 1
             self._rows = np.asarray(schur)
             S = np.zeros((len(schur), len(schur)), order="F")     # symmetric: either order
-            self._long_phase(11, *self._empty())
-            self._long_phase(22, self._empty()[0], S, 1)
+            b, x, _ = self._empty()
+            self._long_phase(11, b, x, 1)
+            self._long_phase(22, b, S, 1)
             with dense_threads(len(S)):
                 self._schur_factor = interruptible(functools.partial(sla.cho_factor, S, lower=True, overwrite_a=True))
         self.nnz_factor = int(ip[17])

@@ -171,6 +171,15 @@ def test_factorisations_leave_the_environment_unchanged():
     assert dict(os.environ) == before
 
 
+def laplacian_3d(n: int) -> sp.csr_matrix:
+    """(n^3, n^3) the 7-point finite-difference Laplacian of an n x n x n grid (symmetric positive
+    definite)."""
+    line = sp.diags([-np.ones(n - 1), 2 * np.ones(n), -np.ones(n - 1)], [-1, 0, 1])
+    eye = sp.eye(n)
+    return (sp.kron(sp.kron(line, eye), eye) + sp.kron(sp.kron(eye, line), eye)
+            + sp.kron(sp.kron(eye, eye), line)).tocsr()
+
+
 def test_pardiso_runs_in_mkls_reproducible_mode():
     """Once PARDISO has run, MKL is in its reproducible mode (`fem.core.linalg._mkl_pardiso`):
     without it a factorisation on two threads that reuses an analysis gave other last bits from
@@ -178,10 +187,7 @@ def test_pardiso_runs_in_mkls_reproducible_mode():
     analysis in single and double precision, solves to the same bits twice."""
     pytest.importorskip("pypardiso")
     from fem.core.linalg import SERIAL_PARDISO_BELOW, mkl_reproducible
-    n = 30
-    line = sp.diags([-np.ones(n - 1), 2 * np.ones(n), -np.ones(n - 1)], [-1, 0, 1])
-    eye = sp.eye(n)
-    A = (sp.kron(sp.kron(line, eye), eye) + sp.kron(sp.kron(eye, line), eye) + sp.kron(sp.kron(eye, eye), line)).tocsr()
+    A = laplacian_3d(30)
     assert A.shape[0] > SERIAL_PARDISO_BELOW
     b = np.random.default_rng(13).standard_normal(A.shape[0])
     for single in (False, True):
@@ -442,12 +448,8 @@ def test_factorisations_leave_no_threads_behind():
         status = Path("/proc/self/status").read_text()
         return int(next(line.split()[1] for line in status.splitlines() if line.startswith("Threads:")))
 
-    m = 30                                             # 27,000 unknowns: factorised on MKL's threads
-    assert m ** 3 >= SERIAL_PARDISO_BELOW
-    T = sp.diags([-np.ones(m - 1), 2.2 * np.ones(m), -np.ones(m - 1)], [-1, 0, 1])
-    eye = sp.eye(m)
-    upper = sp.triu(sp.kron(sp.kron(T, eye), eye) + sp.kron(sp.kron(eye, T), eye) + sp.kron(sp.kron(eye, eye), T),
-                    format="csr")
+    upper = sp.triu(laplacian_3d(30), format="csr")     # 27,000 unknowns: factorised on MKL's threads
+    assert upper.shape[0] >= SERIAL_PARDISO_BELOW
     Pardiso(upper).release()
     before = os_threads()
     for _ in range(20):
