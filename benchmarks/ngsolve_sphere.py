@@ -13,7 +13,7 @@ nu = NU, the neo-Hookean of `fem.core.neohookean`,
 
 a rigid frictionless sphere of radius RADIUS_MM over the corner x = z = 0 (the block's middle),
 depths 0.1 to 0.6 mm. NGSolve: the same energy with the pressure eliminated (p = kappa (J - 1)) on
-P2 displacements, mesh size MAXH_FINE_MM (`--maxh`) in a box of FINE_MM under the sphere, load
+P2 displacements (`--order`), mesh size MAXH_FINE_MM (`--maxh`) in a box of FINE_MM under the sphere, load
 steps of STEP_MM, a penalty max(0, -g)^2 / 2 raised 10 -> PENALTY_MPA_PER_MM within each step, g
 the gap of the deformed top surface to the sphere along the normal of the last state (iterated
 until the state no longer changes, as `ngsolve_contact.py`: frozen, the penalty stays convex; with
@@ -26,12 +26,13 @@ quadrature points; summing the gradient's y entries instead counts NGSolve's hie
 functions, whose coefficients in a translation are 0, and understated it by 13 %); its
 largest penetration, sampled on a grid over the contact, is printed. This project: P2-P1 mixed,
 node-to-surface contact by Lagrange multipliers, on structured graded meshes
-(`fem.verify.closed_forms.box`) of two sizes under the contact (`--sizes`), with the contact
+(`fem.verify.closed_forms.box`) of two sizes under the contact (`--sizes`), ending exactly at the
+block's faces, with the contact
 radius (the outermost node carrying force: it moves in steps of the node spacing).
 
     pip install ngsolve
     python benchmarks/ngsolve_sphere.py [--sizes 0.25 0.125] [--maxh 0.2] [--no-write]
-    python benchmarks/ngsolve_sphere.py --linear --sizes 0.25      # the small-strain baselines
+    python benchmarks/ngsolve_sphere.py --linear --sizes 0.5 0.25 0.125 --order 3   # small strain
 
 Prints per depth both forces [N], their ratio, the contact radii and the run times, and writes
 benchmarks/results/ngsolve_sphere.md.
@@ -62,6 +63,7 @@ NU = 0.48
 FINE_MM = 1.8
 MAXH_FINE_MM = 0.2
 MAXH_MM = 1.5
+ORDER = 2
 HELD = {"bottom": 0.0, "symx": (0.0, None, None), "symz": (None, None, 0.0)}
 """This project's held regions of the quarter block: the bottom, and the symmetry planes' normal."""
 
@@ -92,13 +94,13 @@ def _quarter_mesh(maxh_fine_mm: float):
     return ng.Mesh(OCCGeometry(shape).GenerateMesh(maxh=MAXH_MM, grading=0.25))
 
 
-def _space(maxh_fine_mm: float):
-    """(NGSolve mesh of the quarter block, its P2 displacement space held at the bottom and normal
-    to the symmetry planes, the sphere centre's height: an ng.Parameter, R - depth)."""
+def _space(maxh_fine_mm: float, order: int):
+    """(NGSolve mesh of the quarter block, its displacement space of polynomial `order` held at the
+    bottom and normal to the symmetry planes, the sphere centre's height: an ng.Parameter, R - depth)."""
     import ngsolve as ng
 
     mesh = _quarter_mesh(maxh_fine_mm)
-    fes = ng.VectorH1(mesh, order=2, dirichlet="bottom", dirichletx="symx", dirichletz="symz")
+    fes = ng.VectorH1(mesh, order=order, dirichlet="bottom", dirichletx="symx", dirichletz="symz")
     return mesh, fes, ng.Parameter(RADIUS_MM)
 
 
@@ -126,13 +128,14 @@ def _penalised(fes, energy, gap):
     return a, kpen, force
 
 
-def ngsolve_results(mu: float, lam: float, depths, maxh_fine_mm: float = MAXH_FINE_MM, inverse: str = "umfpack"):
+def ngsolve_results(mu: float, lam: float, depths, maxh_fine_mm: float = MAXH_FINE_MM, inverse: str = "umfpack",
+                    order: int = ORDER):
     """(force (n,) N of the whole block, largest penetration (n,) mm, seconds, DOFs) from NGSolve
     (module docstring)."""
     import ngsolve as ng
 
     t0 = time.perf_counter()
-    mesh, fes, centre = _space(maxh_fine_mm)
+    mesh, fes, centre = _space(maxh_fine_mm, order)
     u = fes.TrialFunction()
     F = ng.Id(3) + ng.Grad(u)
     J = ng.Det(F)
@@ -162,15 +165,16 @@ def ngsolve_results(mu: float, lam: float, depths, maxh_fine_mm: float = MAXH_FI
     return np.array(forces), np.array(pens), time.perf_counter() - t0, fes.ndof
 
 
-def ngsolve_linear(mu: float, lam: float, depths, maxh_fine_mm: float = MAXH_FINE_MM, inverse: str = "umfpack"):
+def ngsolve_linear(mu: float, lam: float, depths, maxh_fine_mm: float = MAXH_FINE_MM, inverse: str = "umfpack",
+                   order: int = ORDER):
     """(force (n,) N of the whole block, seconds) from NGSolve in small strain: linear elasticity
-    on the same mesh and P2 space, the gap along the approach to the sphere's true surface over
+    on the same mesh and space, the gap along the approach to the sphere's true surface over
     the undeformed point (as `fem.contact.linear`), the same penalty; the small-strain baseline of
     `ngsolve_results`."""
     import ngsolve as ng
 
     t0 = time.perf_counter()
-    _, fes, centre = _space(maxh_fine_mm)
+    _, fes, centre = _space(maxh_fine_mm, order)
     u = fes.TrialFunction()
     eps = ng.Sym(ng.Grad(u))
     r2 = RADIUS_MM ** 2 - ng.x * ng.x - ng.z * ng.z
@@ -200,8 +204,8 @@ def _project_block(size_mm: float):
     from fem.core.model import Model
     from fem.verify.closed_forms import box, fine_then_growing
 
-    xs = fine_then_growing(size_mm, FINE_MM, 1.5, BLOCK_MM)
-    ys = -fine_then_growing(size_mm, FINE_MM, 1.5, BLOCK_MM)[::-1]
+    xs = fine_then_growing(size_mm, FINE_MM, 1.5, BLOCK_MM, exact=True)
+    ys = -xs[::-1]
     p, cells, reg = box(xs, ys, xs)
     regions = {"top": reg["ymax"], "bottom": reg["ymin"], "symx": reg["xmin"], "symz": reg["zmin"]}
     return Model(p, cells, np.ones(len(cells), int), regions, material=[E_MPA], nu=NU)
@@ -227,36 +231,39 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--sizes", type=float, nargs="*", default=[0.25, 0.125])
     ap.add_argument("--maxh", type=float, default=MAXH_FINE_MM, help="NGSolve's mesh size under the sphere, mm")
+    ap.add_argument("--depths", type=float, nargs="*", default=list(DEPTHS_MM), help="sphere depths, mm")
+    ap.add_argument("--order", type=int, default=ORDER, help="NGSolve's polynomial order of the displacements")
     ap.add_argument("--inverse", default="umfpack", help="NGSolve's sparse direct solver")
     ap.add_argument("--no-write", action="store_true")
     ap.add_argument("--linear", action="store_true",
                     help="the small-strain baselines instead: NGSolve's and this project's linear forces (printed only)")
     args = ap.parse_args()
     mu, lam = lame(E_MPA, NU)
+    depths = np.asarray(args.depths, float)
     if args.linear:
-        ref, seconds = ngsolve_linear(mu, lam, DEPTHS_MM, args.maxh, args.inverse)
-        ours = {s: project_linear(s, DEPTHS_MM) for s in args.sizes}
+        ref, seconds = ngsolve_linear(mu, lam, depths, args.maxh, args.inverse, args.order)
+        ours = {s: project_linear(s, depths) for s in args.sizes}
         print("| depth mm | NGSolve linear N | " + " | ".join(f"this project {s:g} mm N | / NGSolve - 1" for s in ours) + " |")
-        for i, d in enumerate(DEPTHS_MM):
+        for i, d in enumerate(depths):
             print(f"| {d:.2f} | {ref[i]:.6g} | " + " | ".join(f"{f[i]:.6g} | {100 * (f[i] / ref[i] - 1):+.2f} %"
                                                             for f in ours.values()) + " |")
-        print(f"NGSolve small strain: maxh {args.maxh:g} mm, {seconds:.0f} s")
+        print(f"NGSolve small strain: P{args.order}, maxh {args.maxh:g} mm, {seconds:.0f} s")
         return
     ours = []
     for s in args.sizes:
-        ours.append(project_results(s, DEPTHS_MM))
+        ours.append(project_results(s, depths))
         print(f"this project {s:g} mm: {ours[-1][2]:.1f} s, {ours[-1][3]:,} DOFs, forces {ours[-1][0]}", flush=True)
-    ref, pen, ng_s, ng_dofs = ngsolve_results(mu, lam, DEPTHS_MM, args.maxh, args.inverse)
-    lines = force_table("N", DEPTHS_MM, ref, pen, {s: {"force": f, "contact radius mm": a}
+    ref, pen, ng_s, ng_dofs = ngsolve_results(mu, lam, depths, args.maxh, args.inverse, args.order)
+    lines = force_table("N", depths, ref, pen, {s: {"force": f, "contact radius mm": a}
                                                   for s, (f, a, *_) in zip(args.sizes, ours)})
-    hertz = hertz_sphere(RADIUS_MM, DEPTHS_MM, E_MPA, NU)[0]
+    hertz = hertz_sphere(RADIUS_MM, depths, E_MPA, NU)[0]
     lines += ["", "Hertz (half-space, small strain) for scale: "
-              + ", ".join(f"{d:g} mm {f:.4g} N" for d, f in zip(DEPTHS_MM, hertz)) + "."]
+              + ", ".join(f"{d:g} mm {f:.4g} N" for d, f in zip(depths, hertz)) + "."]
     report(RESULTS, "Neo-Hookean sphere indentation against NGSolve (3D)",
            f"Sphere radius {RADIUS_MM:g} mm into a {2 * BLOCK_MM:g} x {BLOCK_MM:g} x {2 * BLOCK_MM:g} mm block (a "
            f"quarter modelled), E {E_MPA:g} MPa, nu {NU:g} (mu {mu:.6g} MPa, lambda {lam:.6g} MPa), "
            "`python benchmarks/ngsolve_sphere.py`", lines,
-           (ng_dofs, ng_s, f"mesh, {len(DEPTHS_MM)} depths in {STEP_MM:g} mm steps, maxh {args.maxh:g} mm under "
+           (ng_dofs, ng_s, f"mesh, {len(depths)} depths in {STEP_MM:g} mm steps, maxh {args.maxh:g} mm under "
                            "the sphere"),
            [(s, n, t) for s, (_, _, t, n) in zip(args.sizes, ours)], not args.no_write)
 

@@ -237,14 +237,22 @@ def hertz_cylinder(radius_mm, force_N_per_mm, E_MPa, nu):
     return b, 2 * force_N_per_mm / (np.pi * b)
 
 
-def fine_then_growing(fine_mm, fine_len_mm, growth, total_mm):
-    """Grid 0..>=total_mm: cells of fine_mm up to fine_len_mm, then each `growth` times the last."""
+def fine_then_growing(fine_mm, fine_len_mm, growth, total_mm, exact: bool = False):
+    """Grid 0..>=total_mm: cells of fine_mm up to fine_len_mm, then each `growth` times the last.
+    exact: the grid ends on total_mm instead (its last node moved there; a last cell thinner than
+    half the one before is merged into it), for a body of a given size."""
     x = list(np.arange(0.0, fine_len_mm + 1e-9, fine_mm))
     h = fine_mm
     while x[-1] < total_mm:
         h *= growth
         x.append(x[-1] + h)
-    return np.array(x)
+    x = np.array(x)
+    if not exact:
+        return x
+    x = x[x < total_mm * (1 - 1e-9)]
+    if len(x) > 2 and total_mm - x[-1] < 0.5 * (x[-1] - x[-2]) and x[-1] > fine_len_mm + 1e-9:
+        x = x[:-1]
+    return np.r_[x, total_mm]
 
 
 # --------------------------------------------------------------------------- line-load deflection (thesis 6.2.1)

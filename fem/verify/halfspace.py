@@ -76,16 +76,6 @@ class HalfSpaceBlock:
         return ContactModel.from_fe(self.model, self.system, self.region, observe=observe)
 
 
-def _grid(h, fine_len, growth, total):
-    """0 ..= total: spacing h up to fine_len, then growing by `growth`, ending exactly on total
-    (a last cell thinner than half the one before is merged into it)."""
-    x = fine_then_growing(h, fine_len, growth, total)
-    x = x[x < total * (1 - 1e-9)]
-    if len(x) > 2 and total - x[-1] < 0.5 * (x[-1] - x[-2]) and x[-1] > fine_len + 1e-9:
-        x = x[:-1]
-    return np.r_[x, total]
-
-
 def _rounded(p, a, b, W):
     """Map plan points p (n, 2), laid out on concentric squares (Chebyshev radius m), so that the
     squares become circles of radius m for a <= m <= b, with a blend weight w (p -> p (m/|p|)^w)
@@ -108,7 +98,7 @@ def plan_mesh(radius_mm, half_width_mm, fine_mm, growth, quarter=True, fine_radi
     if not W > b:
         raise ValueError(f"the block's half width {W} mm must exceed the fine zone's radius {b} mm")
     n = max(1, round(a / fine_mm))
-    m = _grid(a / n, b, growth, W)                  # Chebyshev radii of the square rings
+    m = fine_then_growing(a / n, b, growth, W, exact=True)      # Chebyshev radii of the square rings
     m[n] = a
     K = len(m) - 1
     # core: the (n + 1)^2 grid of [0, a]^2; ring k > n: 2n + 1 points (m, m j / n), (m j / n, m)
@@ -157,7 +147,8 @@ def flat_block_model(half_width_mm=80.0, depth_mm=80.0, fine_mm=0.25, radius_mm=
         raise ValueError(f"sides must be 'free', 'held' or 'roller', got {sides!r}")
     a, W, D = float(radius_mm), float(half_width_mm), float(depth_mm)
     h = a / max(1, round(a / fine_mm))
-    ys = -_grid(h, FINE_RADII * a if fine_depth_mm is None else fine_depth_mm, depth_growth, D)[::-1]
+    fine_depth = FINE_RADII * a if fine_depth_mm is None else fine_depth_mm
+    ys = -fine_then_growing(h, fine_depth, depth_growth, D, exact=True)[::-1]
     if round_punch:
         plan, tri = plan_mesh(a, W, fine_mm, growth, quarter, fine_radius_mm)
         pts = np.vstack([np.column_stack([plan[:, 0], np.full(len(plan), y), plan[:, 1]]) for y in ys])
@@ -167,7 +158,8 @@ def flat_block_model(half_width_mm=80.0, depth_mm=80.0, fine_mm=0.25, radius_mm=
                    for i, c in ((0, "x"), (2, "z")) for e, v in (("min", lo), ("max", W))}
         regions["ymin"], regions["ymax"] = np.isclose(pts[:, 1], -D), np.isclose(pts[:, 1], 0.0)
     else:
-        xs = _grid(h, FINE_RADII * a if fine_radius_mm is None else fine_radius_mm, growth, W)
+        fine_radius = FINE_RADII * a if fine_radius_mm is None else fine_radius_mm
+        xs = fine_then_growing(h, fine_radius, growth, W, exact=True)
         if not quarter:
             xs = np.r_[-xs[:0:-1], xs]
         pts, cells, regions = box(xs, ys, xs)
