@@ -165,7 +165,8 @@ def case_dorsal(args):
 
 
 def case_hertz(args):
-    """Rigid sphere R = 5 mm on a quarter block 40 x 40 x 40 mm (graded P2 tets), E = 1 MPa."""
+    """Rigid sphere R = 5 mm on a quarter block of graded P2 tets at least 40 mm wide and deep (the
+    grids' first nodes beyond 40 mm: 47.9 x 58.9 x 47.9 mm), E = 1 MPa."""
     rows = []
     for nu in (0.3, 0.49):
         t = time.perf_counter()

@@ -144,7 +144,8 @@ def headless_chromium():
 
 def quarter_block(nu, fine_mm, size_mm, E_MPa=1.0):
     """(Model, held regions): a quarter of an elastic block (x, z >= 0 symmetry planes, y <= 0,
-    the bottom held), P2, fine_mm under the origin, size_mm across."""
+    the bottom held), P2, fine_mm under the origin, at least size_mm across and deep (graded
+    grids that end on their first nodes beyond it)."""
     from fem.core.model import Model
     from fem.verify.closed_forms import box, fine_then_growing
 
