@@ -59,7 +59,8 @@ def problem(model_dir):
     free = np.setdiff1d(np.arange(model.ndof), fixed)
     nodes, _, pos, T = condense_plan(model, free, sn.nodes, a)
     if T is not None:
-        raise SystemExit("error: this benchmark handles approaches along a coordinate axis only")
+        print("error: this benchmark handles approaches along a coordinate axis only", file=sys.stderr)
+        raise SystemExit(2)
     rec = R.Receptors()
     grid = R.receptor_grid(*R.receptor_surface(model, sn), np.asarray(rec.depths_mm, float), rec.spacing_mm,
                            R.receptor_line(rec.line, sn, model.dim))
@@ -150,7 +151,16 @@ def main():
     ap.add_argument("--ooc", action="store_true", help="MUMPS out of core (factors on disk)")
     ap.add_argument("--no-write", action="store_true")
     args = ap.parse_args()
-    import mumps  # noqa: F401 - refuse before any computation when it is missing
+    try:
+        import mumps  # noqa: F401 - refused before any computation when it is missing
+    except ImportError:
+        print("error: python-mumps is not installed: apt-get install libmumps-seq-dev libopenblas0-pthread, "
+              "then pip install python-mumps", file=sys.stderr)
+        raise SystemExit(2) from None
+    if not (args.model / "mesh.vtu").is_file():
+        print(f"error: {args.model} is not a model folder (no mesh.vtu): give one made by pipeline.py mesh",
+              file=sys.stderr)
+        raise SystemExit(2)
 
     model, free, nodes, cols, rows, a = problem(args.model)
     k = len(cols)
