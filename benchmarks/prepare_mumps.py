@@ -80,47 +80,29 @@ def block_starts(k: int, block: int, blocks: int) -> np.ndarray:
     return np.linspace(0, k - block, blocks).astype(int)
 
 
-def saddle_upper(model, free) -> sp.coo_matrix:
-    """The upper triangle of the saddle matrix [[Kdev, B^T], [B, -D]] on the free DOFs, as
-    `fem.core.linalg.SaddleFactor` factorises it."""
-    from fem.core.linalg import drop_round_off
+def saddle_upper(model, free) -> sp.csr_matrix:
+    """The upper triangle of the saddle matrix on the free DOFs, as the project factorises it."""
+    from fem.core.linalg import saddle_upper as upper
+    from fem.core.patterns import drop_round_off
 
-    Kdev, B = model.K_dev[free][:, free], model.discretisation.B[:, free]
-    return drop_round_off(sp.bmat([[sp.triu(Kdev), B.T], [None, -sp.diags(model.pressure_compliance)]],
-                                   format="coo"))
+    return drop_round_off(upper(model.K_dev[free][:, free], model.discretisation.B[:, free], model.pressure_compliance))
 
 
-def mumps_entries(upper, cols, rows, block: int, blocks: int, ooc: bool, rhs_block: int):
-    """MUMPS: (analysis and factorisation s, MUMPS's memory MB, factor non-zeros, seconds per
-    candidate, entries (r, blocks * block) of the inverse at `rows` for the first columns)."""
-    import mumps
-    from mumps import _mumps
+def mumps_entries(upper, cols, rows, block: int, blocks: int, ooc: bool):
+    """MUMPS through `fem.core.inverse.InverseEntries`: (analysis and factorisation s, MUMPS's
+    memory MB, factor non-zeros, seconds per candidate, entries (r, blocks * block) of the inverse
+    at `rows` for the timed columns)."""
+    from fem.core.inverse import InverseEntries
 
-    ctx = mumps.Context()
-    ctx.set_matrix(upper, symmetric=True)
-    n = upper.shape[0]
     t0 = time.perf_counter()
-    ctx.analyze(ordering="scotch")
-    ctx.factor(reuse_analysis=True, ooc=ooc)
+    entries = InverseEntries(upper, out_of_core=ooc)
     factor_s = time.perf_counter() - t0
-    inst = ctx.mumps_instance
-    inst.icntl[27], inst.icntl[30], inst.icntl[20] = rhs_block, 1, 1    # blocking; inverse entries; sparse
     out, solve_s = [], 0.0
     for start in block_starts(len(cols), block, blocks):
-        c = cols[start:start + block]
-        counts = np.zeros(n, int)
-        counts[c] = len(rows)
-        ptr = (np.r_[0, np.cumsum(counts)] + 1).astype(_mumps.int_dtype)          # MUMPS needs NRHS = n
-        ind = (np.tile(rows, len(c)) + 1).astype(_mumps.int_dtype)
-        values = np.zeros(len(ind))
-        inst.set_sparse_rhs(ptr, ind, values)
-        inst.job = 3
         t = time.perf_counter()
-        ctx.call()
+        out.append(entries.block(rows, cols[start:start + block]))
         solve_s += time.perf_counter() - t
-        out.append(values.reshape(len(c), len(rows)).T)
-    stats = ctx.factor_stats
-    return factor_s, stats.memory, stats.nonzeros, solve_s / (blocks * block), np.hstack(out)
+    return factor_s, entries.stats.memory, entries.stats.nonzeros, solve_s / (blocks * block), np.hstack(out)
 
 
 def pardiso_entries(model, free, nodes, rows, a, block: int, blocks: int):
@@ -147,16 +129,15 @@ def main():
     ap.add_argument("model", type=Path)
     ap.add_argument("--block", type=int, default=128, help="candidates per solve")
     ap.add_argument("--blocks", type=int, default=3, help="blocks timed (then extrapolated)")
-    ap.add_argument("--rhs-block", type=int, default=128, help="MUMPS's ICNTL(27)")
     ap.add_argument("--ooc", action="store_true", help="MUMPS out of core (factors on disk)")
     ap.add_argument("--no-write", action="store_true")
     args = ap.parse_args()
-    try:
-        import mumps  # noqa: F401 - refused before any computation when it is missing
-    except ImportError:
+    from fem.core.inverse import available
+
+    if not available():                              # refused before any computation
         print("error: python-mumps is not installed: apt-get install libmumps-seq-dev libopenblas0-pthread, "
               "then pip install python-mumps", file=sys.stderr)
-        raise SystemExit(2) from None
+        raise SystemExit(2)
     if not (args.model / "mesh.vtu").is_file():
         print(f"error: {args.model} is not a model folder (no mesh.vtu): give one made by pipeline.py mesh",
               file=sys.stderr)
@@ -166,7 +147,7 @@ def main():
     k = len(cols)
     upper = saddle_upper(model, free)
     print(f"{args.model}: {upper.shape[0]:,} unknowns, {k:,} candidates, {len(rows):,} requested rows", flush=True)
-    m_f, m_mb, m_nnz, m_per, m_x = mumps_entries(upper, cols, rows, args.block, args.blocks, args.ooc, args.rhs_block)
+    m_f, m_mb, m_nnz, m_per, m_x = mumps_entries(upper, cols, rows, args.block, args.blocks, args.ooc)
     m_peak = peak_gb()
     del upper
     print(f"MUMPS: factorisation {m_f:.1f} s ({m_mb} MB, {m_nnz / 1e6:.0f} M non-zeros), "
@@ -177,7 +158,7 @@ def main():
           f"largest difference {err:.1e}", flush=True)
     lines = [f"| solver | factorisation s | ms per candidate | {k:,} candidates s (extrapolated) | total s | note |",
              "|---|---|---|---|---|---|",
-             f"| MUMPS 5.5 ({'out of core' if args.ooc else 'in core'}, SCOTCH, ICNTL(27) {args.rhs_block}) | "
+             f"| MUMPS 5.5 ({'out of core' if args.ooc else 'in core'}, `fem.core.inverse`) | "
              f"{m_f:.1f} | {1e3 * m_per:.2f} | {m_per * k:.0f} | {m_f + m_per * k:.0f} | "
              f"{m_mb} MB, {m_nnz / 1e6:.0f} M non-zeros, process peak {m_peak:.2f} GB |",
              f"| PARDISO (this project: Schur complement, backward substitutions) | {p_f:.1f} | {1e3 * p_per:.2f} | "
@@ -190,7 +171,7 @@ def main():
             OUT.write_text("# The whole-pad response model by MUMPS (inverse entries) against PARDISO\n")
         with OUT.open("a") as f:
             f.write(f"\n## {time.strftime('%Y-%m-%d %H:%M')}: `python benchmarks/prepare_mumps.py {args.model} "
-                    f"--block {args.block} --blocks {args.blocks} --rhs-block {args.rhs_block}"
+                    f"--block {args.block} --blocks {args.blocks}"
                     f"{' --ooc' if args.ooc else ''}`\n\n{what_was_timed(k, len(rows), args)}\n\n{text}\n")
 
 

@@ -417,6 +417,13 @@ def solve_refined(A: sp.spmatrix, b: np.ndarray) -> np.ndarray:
 
 
 # --------------------------------------------------------------------------- saddle system
+def saddle_upper(Kdev: sp.spmatrix, B: sp.spmatrix, D: np.ndarray) -> sp.csr_matrix:
+    """(n + m, n + m) upper triangle of the saddle matrix [[Kdev, B^T], [B, -diag(D)]], which
+    symmetric solvers read, built without the full matrix (half the memory and time of
+    triu(bmat(...))); Kdev (n, n), B (m, n), D (m,)."""
+    return sp.bmat([[sp.triu(Kdev), B.T], [None, -sp.diags(D)]], format="csr")
+
+
 class SaddleFactor:
     """K = Kdev + B^T D^-1 B (n, n) factorised once and reused for many right-hand sides.
 
@@ -482,9 +489,7 @@ class SaddleFactor:
                 A = sp.bmat([[Kdev, B.T], [B, -sp.diags(D)]], format="csc")
                 self.backend, self._solve = "scipy-splu", splu(A).solve
                 return
-            # symmetric types read the upper triangle, built without the full matrix (half the
-            # memory and time of triu(bmat(...)); the local blocks are freed before the factorisation)
-            upper = sp.bmat([[sp.triu(Kdev), B.T], [None, -sp.diags(D)]], format="csr")
+            upper = saddle_upper(Kdev, B, D)        # the local blocks are freed before the factorisation
             del Kdev, B
             if earlier is not None and earlier.reusable and earlier.n == upper.shape[0]:
                 upper = onto_pattern(upper, *earlier.pattern)

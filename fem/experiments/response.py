@@ -15,6 +15,9 @@ along the approach at j:
   transposed: the loads of B sit on condensed rows, so each block of 64 candidates is one
   backward substitution (`fem.core.system.LinearSystem.solve_condensed`); through the transposed
   system B^T K^-1 O^T (full solves) when O has fewer rows than there are condensed candidates.
+  Where python-mumps is installed, a model of INVERSE_ENTRIES_FROM_DOFS unknowns or more indented
+  along a coordinate axis gets C and R from MUMPS's entries of K^-1 instead (`fem.core.inverse`:
+  no Schur complement, pruned substitutions; equal within one rounding step of the rows).
   The stress rows follow from the strain rows point by point (`fem.receptors.grid.complete_outputs`
   with the Lame moduli lame_MPa (n, 2) of each point's element), so they are computed when read,
   not stored (3D: 9 of 15 values per receptor point; 2D: 5 of 9).
@@ -58,7 +61,11 @@ import scipy.sparse as sp
 from fem.contact.compliance import Compliance, DenseReach, RowCache
 from fem.contact.facets import fe_facets
 from fem.contact.linear import ContactModel
+from fem.core import inverse
 from fem.core.fields import STRAIN_COMPONENTS, hooke_matrix
+from fem.core.linalg import saddle_upper
+from fem.core.patterns import drop_round_off
+from fem.core.system import coordinate_axis
 from fem.io.modelfolder import CONDENSE_MAX_NODES, CONTACT_REGION, HELD, held_regions
 from fem.io.rows import RowFile, quantise, write_rows
 from fem.receptors.grid import ReceptorSampler, complete_outputs
@@ -76,6 +83,10 @@ STORE_MAX_BYTES = 3 * 2**30
 models used least recently (by their last load or save) until the rest fit."""
 WT_REL = 1e-9
 """WT is stored rounded to a step below this fraction of each row's largest magnitude."""
+INVERSE_ENTRIES_FROM_DOFS = 50_000
+"""From this many unknowns a response model along a coordinate axis is built by MUMPS's entries of
+the inverse where python-mumps is installed (`fem.core.inverse`): monkey 1.0 mm (70,629) 4 s
+against 7 s, human 0.5 mm about 101 s against 193 s (benchmarks/prepare_mumps.py)."""
 RT_REL = 5e-8
 """RT likewise, per row and block (the displacements, the strains)."""
 STORED_RTOL = 1e-6
@@ -175,24 +186,14 @@ def build_response(model, approach, sampler, key: str, candidates=None, progress
     if model.dim == 2 and abs(a[2]) > 1e-12:
         raise ValueError("a 2D model is indented within its x-y plane: the approach needs z = 0")
     progress = as_progress(progress)
-    with progress.task(f"response model: factorising {model.ndof} DOFs with {int(candidates.sum())} contact "
-                       f"candidates condensed", kind=f"factorise-{model.dim}d",
-                       size=model.ndof + 3 * int(candidates.sum())):
-        system = model.system(held_regions(model), condense=(sn.nodes[candidates], a))
-    reach = system.stored(sn.nodes, a)
-    k = int(reach.sum())
     B = sp.csc_matrix((np.tile(a[:model.dim], m), (sn.dofs.ravel(), np.repeat(np.arange(m), model.dim))),
                       shape=(model.ndof, m))
-    O = sp.vstack([B[:, ~reach].T, sampler.operator[:sampler.independent]]).tocsr()   # rows still to solve for
-    with progress.task(f"response model: {min(k, O.shape[0])} solves for {O.shape[0] - (m - k)} receptor "
-                       f"values and {m - k} other candidates"):
-        if k <= O.shape[0]:                          # O K^-1 B: k loads on condensed unknowns
-            out = _apply_condensed(system, sn.nodes[reach], a, O)
-        else:                                        # B^T K^-1 O^T: one solve per row of O
-            out = _apply_inverse(system, O.T.tocsc(), B[:, reach].T.tocsr())
-    C = system.compliance(sn.nodes[reach], a)                       # symmetric: rows are columns
-    del system
-    model.release_factors()                 # the factorisation's memory (C stays): the rows are all it was for
+    axis = coordinate_axis(a[:model.dim])
+    if axis is not None and model.ndof >= INVERSE_ENTRIES_FROM_DOFS and inverse.available():
+        reach, C, out = _by_inverse_entries(model, sn, candidates, a, axis, B, sampler, progress)
+    else:
+        reach, C, out = _by_schur_complement(model, sn, candidates, a, B, sampler, progress)
+    k = int(reach.sum())
     WT = np.empty((k, m))
     WT[:, reach], WT[:, ~reach] = C, out[:, :m - k]
     del C
@@ -204,6 +205,65 @@ def build_response(model, approach, sampler, key: str, candidates=None, progress
     rm.diagonal_mm_per_N = WT[np.arange(k), np.flatnonzero(reach)]
     rm.build_seconds = time.perf_counter() - t0
     return rm
+
+
+def _observed(model, reach, B, sampler) -> sp.csr_matrix:
+    """(p, ndof) the outputs still to compute per condensed candidate: the displacement along the
+    approach at the candidates not condensed (B's ~reach columns), then the sampler's independent
+    receptor values."""
+    return sp.vstack([B[:, ~reach].T, sampler.operator[:sampler.independent]]).tocsr()
+
+
+def _by_schur_complement(model, sn, candidates, a, B, sampler, progress):
+    """(reach (m,) bool, C (k, k) [mm/N], out (k, p)) of `build_response` by PARDISO: the compliance
+    from the Schur complement onto the condensed candidates, the outputs by backward substitutions
+    (or through the transposed system when there are fewer outputs than candidates)."""
+    with progress.task(f"response model: factorising {model.ndof} DOFs with {int(candidates.sum())} contact "
+                       f"candidates condensed", kind=f"factorise-{model.dim}d",
+                       size=model.ndof + 3 * int(candidates.sum())):
+        system = model.system(held_regions(model), condense=(sn.nodes[candidates], a))
+    reach = system.stored(sn.nodes, a)
+    k, m = int(reach.sum()), len(reach)
+    outputs = _observed(model, reach, B, sampler)
+    with progress.task(f"response model: {min(k, outputs.shape[0])} solves for {outputs.shape[0] - (m - k)} "
+                       f"receptor values and {m - k} other candidates"):
+        if k <= outputs.shape[0]:                    # O K^-1 B: k loads on condensed unknowns
+            out = _apply_condensed(system, sn.nodes[reach], a, outputs)
+        else:                                        # B^T K^-1 O^T: one solve per row of O
+            out = _apply_inverse(system, outputs.T.tocsc(), B[:, reach].T.tocsr())
+    C = system.compliance(sn.nodes[reach], a)                       # symmetric: rows are columns
+    del system
+    model.release_factors()                 # the factorisation's memory (C stays): the rows are all it was for
+    return reach, C, out
+
+
+def _by_inverse_entries(model, sn, candidates, a, axis, B, sampler, progress):
+    """`_by_schur_complement`'s (reach, C, out) by MUMPS (`fem.core.inverse`), for an approach along
+    the coordinate `axis`: per block of condensed candidates, the entries of K^-1 at the candidates
+    and at the unknowns the outputs read, the load a unit force along `a` on the candidate's
+    free DOF."""
+    fixed, _ = model.discretisation.constraints(held_regions(model), model.material.rigid)
+    free = np.setdiff1d(np.arange(model.ndof), fixed)
+    along = sn.dofs[:, axis]
+    reach = candidates & np.isin(along, free)
+    k = int(reach.sum())
+    outputs = _observed(model, reach, B, sampler)[:, free].tocsc()
+    cols = np.searchsorted(free, along[reach])
+    rows = np.union1d(np.flatnonzero(np.diff(outputs.indptr)), cols)
+    read, at = outputs[:, rows].tocsr(), np.searchsorted(rows, cols)
+    with progress.task(f"response model: factorising {model.ndof} DOFs (MUMPS)", kind=f"factorise-mumps-{model.dim}d",
+                       size=model.ndof):
+        entries = inverse.InverseEntries(drop_round_off(saddle_upper(model.K_dev[free][:, free],
+                                                                     model.discretisation.B[:, free],
+                                                                     model.pressure_compliance)))
+    C, out = np.empty((k, k)), np.empty((k, outputs.shape[0]))
+    with progress.task(f"response model: entries of the inverse for {k} candidates at {len(rows)} unknowns"):
+        for s in range(0, k, inverse.RHS_BLOCK):
+            X = entries.block(rows, cols[s:s + inverse.RHS_BLOCK])      # K^-1 e_j: the unknown along the axis
+            C[:, s:s + X.shape[1]] = X[at]                              # a . u for u = a[axis] X: a[axis]^2 = 1
+            out[s:s + X.shape[1]] = (read @ (a[axis] * X)).T
+    entries.release()
+    return reach, C, out
 
 
 def _apply_inverse(system, loads, observe) -> np.ndarray:

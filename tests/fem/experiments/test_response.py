@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import pipeline
+from fem.core import inverse
 from fem.experiments.response import STORED_RTOL, ResponseStore, response_key
 from fem.experiments.runner import run_experiments
 from fem.experiments.scene import Scene
@@ -269,3 +270,32 @@ def test_a_store_holds_its_models_with_the_rows_read(cyl8, monkeypatch):
     assert sum(decoded) == before
     for (_, a), (_, b) in zip(first.experiments[0].steps, again.experiments[0].steps, strict=True):
         assert np.array_equal(a.force_N, b.force_N) and np.array_equal(a.observed, b.observed)
+
+
+@pytest.mark.skipif(not inverse.available(), reason="python-mumps is not installed (optional)")
+def test_inverse_entries_build_the_rows_of_the_schur_path(monkey, monkeypatch):
+    """The MUMPS path (`fem.core.inverse`, used from INVERSE_ENTRIES_FROM_DOFS unknowns) against the
+    PARDISO path on the same model: equal within one rounding step of the stored rows, and the
+    same bytes when built twice."""
+    from fem.experiments import response
+    from fem.experiments.runner import Receptors, receptor_grid, receptor_line, receptor_surface
+    from fem.io.modelfolder import CONTACT_REGION, approach_down, folder_info
+    from fem.receptors.grid import ReceptorSampler
+
+    model, info = read_model(monkey, None, None)
+    sn = model.surface_nodes(CONTACT_REGION[3])
+    rec = Receptors()
+    grid = receptor_grid(*receptor_surface(model, sn), np.asarray(rec.depths_mm, float), rec.spacing_mm,
+                         receptor_line(rec.line, sn, 3))
+    sampler, a = ReceptorSampler(model, grid), approach_down(folder_info(monkey))
+    touched = np.zeros(len(sn.nodes), bool)
+    touched[::3] = True                              # some candidates not condensed: WT's other columns
+    built = {}
+    for name, threshold in (("schur", 10**12), ("inverse", 0), ("again", 0)):
+        monkeypatch.setattr(response, "INVERSE_ENTRIES_FROM_DOFS", threshold)
+        built[name] = response.build_response(model, a, sampler, "key", touched)
+    schur, inv = built["schur"], built["inverse"]
+    assert np.array_equal(schur.reach, inv.reach) and inv.reach.sum() == touched.sum()
+    assert _rel(schur.WT, inv.WT) <= response.WT_REL
+    assert _rel(schur.RT, inv.RT) <= response.RT_REL
+    assert np.array_equal(inv.WT, built["again"].WT) and np.array_equal(inv.RT, built["again"].RT)
