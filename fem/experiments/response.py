@@ -207,7 +207,7 @@ def build_response(model, approach, sampler, key: str, candidates=None, progress
     return rm
 
 
-def _observed(model, reach, B, sampler) -> sp.csr_matrix:
+def _observed(reach, B, sampler) -> sp.csr_matrix:
     """(p, ndof) the outputs still to compute per condensed candidate: the displacement along the
     approach at the candidates not condensed (B's ~reach columns), then the sampler's independent
     receptor values."""
@@ -224,7 +224,7 @@ def _by_schur_complement(model, sn, candidates, a, B, sampler, progress):
         system = model.system(held_regions(model), condense=(sn.nodes[candidates], a))
     reach = system.stored(sn.nodes, a)
     k, m = int(reach.sum()), len(reach)
-    outputs = _observed(model, reach, B, sampler)
+    outputs = _observed(reach, B, sampler)
     with progress.task(f"response model: {min(k, outputs.shape[0])} solves for {outputs.shape[0] - (m - k)} "
                        f"receptor values and {m - k} other candidates"):
         if k <= outputs.shape[0]:                    # O K^-1 B: k loads on condensed unknowns
@@ -247,7 +247,7 @@ def _by_inverse_entries(model, sn, candidates, a, axis, B, sampler, progress):
     along = sn.dofs[:, axis]
     reach = candidates & np.isin(along, free)
     k = int(reach.sum())
-    outputs = _observed(model, reach, B, sampler)[:, free].tocsc()
+    outputs = _observed(reach, B, sampler)[:, free].tocsc()
     cols = np.searchsorted(free, along[reach])
     rows = np.union1d(np.flatnonzero(np.diff(outputs.indptr)), cols)
     read, at = outputs[:, rows].tocsr(), np.searchsorted(rows, cols)
