@@ -1,8 +1,9 @@
 """Entries of the inverse of a sparse symmetric matrix by MUMPS (ICNTL(30)), for the stored
 response models (`fem.experiments.response`): a factorisation with no ordering constraint, then
 per block of unit right-hand sides a forward substitution pruned to their paths and a backward one
-stopped at the rows asked for. On the human 0.5 mm model's whole pad this halves PARDISO's Schur
-complement and backward substitutions (docs/indentation.md, benchmarks/prepare_mumps.py).
+stopped at the rows asked for. On the human 0.5 mm model's whole pad: factorisation and entries
+133 s against about 200 s for PARDISO's Schur complement and backward substitutions
+(docs/indentation.md, benchmarks/prepare_mumps.py).
 
 Optional: python-mumps over the system's MUMPS library (Debian: libmumps-seq-dev; PyPI has
 python-mumps only as a source package that builds against it). Without it `available()` is False
@@ -17,8 +18,9 @@ ORDERING = "scotch"
 """The fill-reducing ordering: the best of Debian's build (no METIS) on the human 0.5 mm model
 (356 M factor non-zeros; PORD 368 M, AMF 463 M)."""
 RHS_BLOCK = 128
-"""MUMPS's right-hand-side blocking in the solve (ICNTL(27)): 11.96 ms per candidate against
-12.95 ms at 64 and 15.1 ms at 32 on the human 0.5 mm model."""
+"""MUMPS's right-hand-side blocking in the solve (ICNTL(27)), and the columns `fem.experiments.
+response` asks for per solve: on the human 0.5 mm model, 3 blocks of 128 candidates, 12.7 ms per
+candidate against 12.95 ms at 64 and 15.1 ms at 32 (9.5 s for a block of 512 at 512)."""
 
 
 def available() -> bool:

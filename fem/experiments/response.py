@@ -85,8 +85,9 @@ WT_REL = 1e-9
 """WT is stored rounded to a step below this fraction of each row's largest magnitude."""
 INVERSE_ENTRIES_FROM_DOFS = 50_000
 """From this many unknowns a response model along a coordinate axis is built by MUMPS's entries of
-the inverse where python-mumps is installed (`fem.core.inverse`): monkey 1.0 mm (70,629) 4 s
-against 7 s, human 0.5 mm about 101 s against 193 s (benchmarks/prepare_mumps.py)."""
+the inverse where python-mumps is installed (`fem.core.inverse`): builds on the monkey 1.0 mm model
+(70,629 unknowns) 4.7-5.7 s against 7.0-7.4 s by PARDISO, the human 0.5 mm whole `prepare` 141 s
+against 191.5-214 s. Smaller models, where PARDISO takes a few seconds at most, were not compared."""
 RT_REL = 5e-8
 """RT likewise, per row and block (the displacements, the strains)."""
 STORED_RTOL = 1e-6
