@@ -31,7 +31,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-import scipy.sparse as sp
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -44,9 +43,10 @@ def peak_gb() -> float:
 
 
 def problem(model_dir):
-    """(model, free DOFs (n_free,), candidate nodes (k,), their free positions (k,) sorted, the
-    requested free positions (r,): candidates and the receptor operators' support, the approach
-    (3,)) for the default material, approach and receptor grid of a model folder."""
+    """(model, free DOFs (n_free,), the saddle matrix's upper triangle on them (`Model.free_saddle`),
+    candidate nodes (k,), their free positions (k,) sorted, the requested free positions (r,):
+    candidates and the receptor operators' support, the approach (3,)) for the default material,
+    approach and receptor grid of a model folder."""
     from fem.core.system import condense_plan
     from fem.experiments import runner as R
     from fem.io.modelfolder import CONTACT_REGION, approach_down, held_regions
@@ -55,8 +55,7 @@ def problem(model_dir):
     model, info = R.read_model(model_dir, None, None)
     sn = model.surface_nodes(CONTACT_REGION[model.dim])
     a = approach_down(info)
-    fixed, _ = model.discretisation.constraints(held_regions(model), model.material.rigid)
-    free = np.setdiff1d(np.arange(model.ndof), fixed)
+    free, upper = model.free_saddle(held_regions(model))
     nodes, _, pos, T = condense_plan(model, free, sn.nodes, a)
     if T is not None:
         print("error: this benchmark handles approaches along a coordinate axis only", file=sys.stderr)
@@ -71,21 +70,13 @@ def problem(model_dir):
     is_free[free] = True
     order = np.argsort(pos)
     rows = np.union1d(np.searchsorted(free, support[is_free[support]]), pos)
-    return model, free, nodes[order], pos[order], rows, a
+    return model, free, upper, nodes[order], pos[order], rows, a
 
 
 def block_starts(k: int, block: int, blocks: int) -> np.ndarray:
     """(blocks,) first candidate of each timed block, spread evenly over the k candidates (sorted
     by unknown, so over the pad), since the cost of a solve depends on where its loads sit."""
     return np.linspace(0, k - block, blocks).astype(int)
-
-
-def saddle_upper(model, free) -> sp.csr_matrix:
-    """The upper triangle of the saddle matrix on the free DOFs, as the project factorises it."""
-    from fem.core.linalg import saddle_upper as upper
-    from fem.core.patterns import drop_round_off
-
-    return drop_round_off(upper(model.K_dev[free][:, free], model.discretisation.B[:, free], model.pressure_compliance))
 
 
 def mumps_entries(upper, cols, rows, block: int, blocks: int, ooc: bool):
@@ -143,9 +134,8 @@ def main():
               file=sys.stderr)
         raise SystemExit(2)
 
-    model, free, nodes, cols, rows, a = problem(args.model)
+    model, free, upper, nodes, cols, rows, a = problem(args.model)
     k = len(cols)
-    upper = saddle_upper(model, free)
     print(f"{args.model}: {upper.shape[0]:,} unknowns, {k:,} candidates, {len(rows):,} requested rows", flush=True)
     m_f, m_mb, m_nnz, m_per, m_x = mumps_entries(upper, cols, rows, args.block, args.blocks, args.ooc)
     m_peak = peak_gb()

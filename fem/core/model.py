@@ -70,8 +70,9 @@ from skfem.helpers import dot
 
 from fem.core.discretisation import Discretisation, SurfaceNodes
 from fem.core.fields import Solution, point_operator
-from fem.core.linalg import SaddleFactor
+from fem.core.linalg import SaddleFactor, saddle_upper
 from fem.core.materials import DEFAULT_NU, Material, default_code
+from fem.core.patterns import drop_round_off
 from fem.core.system import LinearSystem, condense_plan
 from fingertip.errors import InputError
 
@@ -320,6 +321,15 @@ class Model:
             factor.condensed_order = by_node
             self._factors = {key: factor}                       # keep one
         return LinearSystem(self, fixed, values, self._factors[key])
+
+    def free_saddle(self, prescribed=None) -> tuple[np.ndarray, sp.csr_matrix]:
+        """(free DOFs (n_free,) sorted, the upper triangle of the saddle matrix [[Kdev, B^T], [B, -D]]
+        on them with round-off dropped): what `system` factorises, for another solver
+        (`fem.core.inverse`); prescribed as in `system`."""
+        fixed, _ = self.discretisation.constraints(prescribed, self.material.rigid)
+        free = np.setdiff1d(np.arange(self.ndof), fixed)
+        return free, drop_round_off(saddle_upper(self.K_dev[free][:, free], self.discretisation.B[:, free],
+                                                 self.pressure_compliance))
 
     def release_factors(self) -> None:
         """Drop the cached factorisation of `system` (its memory, with the systems that hold it

@@ -63,8 +63,6 @@ from fem.contact.facets import fe_facets
 from fem.contact.linear import ContactModel
 from fem.core import inverse
 from fem.core.fields import STRAIN_COMPONENTS, hooke_matrix
-from fem.core.linalg import saddle_upper
-from fem.core.patterns import drop_round_off
 from fem.core.system import coordinate_axis
 from fem.io.modelfolder import CONDENSE_MAX_NODES, CONTACT_REGION, HELD, held_regions
 from fem.io.rows import RowFile, quantise, write_rows
@@ -243,8 +241,11 @@ def _by_inverse_entries(model, sn, candidates, a, axis, B, sampler, progress):
     the coordinate `axis`: per block of condensed candidates, the entries of K^-1 at the candidates
     and at the unknowns the outputs read, the load a unit force along `a` on the candidate's
     free DOF."""
-    fixed, _ = model.discretisation.constraints(held_regions(model), model.material.rigid)
-    free = np.setdiff1d(np.arange(model.ndof), fixed)
+    with progress.task(f"response model: factorising {model.ndof} DOFs (MUMPS)", kind=f"factorise-mumps-{model.dim}d",
+                       size=model.ndof):
+        free, upper = model.free_saddle(held_regions(model))
+        entries = inverse.InverseEntries(upper)
+        del upper
     along = sn.dofs[:, axis]
     reach = candidates & np.isin(along, free)
     k = int(reach.sum())
@@ -252,11 +253,6 @@ def _by_inverse_entries(model, sn, candidates, a, axis, B, sampler, progress):
     cols = np.searchsorted(free, along[reach])
     rows = np.union1d(np.flatnonzero(np.diff(outputs.indptr)), cols)
     read, at = outputs[:, rows].tocsr(), np.searchsorted(rows, cols)
-    with progress.task(f"response model: factorising {model.ndof} DOFs (MUMPS)", kind=f"factorise-mumps-{model.dim}d",
-                       size=model.ndof):
-        entries = inverse.InverseEntries(drop_round_off(saddle_upper(model.K_dev[free][:, free],
-                                                                     model.discretisation.B[:, free],
-                                                                     model.pressure_compliance)))
     C, out = np.empty((k, k)), np.empty((k, outputs.shape[0]))
     with progress.task(f"response model: entries of the inverse for {k} candidates at {len(rows)} unknowns"):
         for s in range(0, k, inverse.RHS_BLOCK):
