@@ -44,9 +44,9 @@ def peak_gb() -> float:
 
 def problem(model_dir):
     """(model, free DOFs (n_free,), the saddle matrix's upper triangle on them (`Model.free_saddle`),
-    candidate nodes (k,), their free positions (k,) sorted, the requested free positions (r,):
-    candidates and the receptor operators' support, the approach (3,)) for the default material,
-    approach and receptor grid of a model folder."""
+    candidate nodes (k,), their free positions (k,) sorted, their coordinates (k, 3) [mm], the
+    requested free positions (r,): candidates and the receptor operators' support, the approach
+    (3,)) for the default material, approach and receptor grid of a model folder."""
     from fem.core.system import condense_plan
     from fem.experiments import runner as R
     from fem.io.modelfolder import CONTACT_REGION, approach_down, held_regions
@@ -70,16 +70,21 @@ def problem(model_dir):
     is_free[free] = True
     order = np.argsort(pos)
     rows = np.union1d(np.searchsorted(free, support[is_free[support]]), pos)
-    return model, free, upper, nodes[order], pos[order], rows, a
+    xyz = sn.x[np.searchsorted(sn.nodes, nodes[order])]
+    return model, free, upper, nodes[order], pos[order], xyz, rows, a
 
 
-def block_starts(k: int, block: int, blocks: int) -> np.ndarray:
-    """(blocks,) first candidate of each timed block, spread evenly over the k candidates (sorted
-    by unknown, so over the pad), since the cost of a solve depends on where its loads sit."""
-    return np.linspace(0, k - block, blocks).astype(int)
+def timed_blocks(xyz, block: int, blocks: int) -> list[np.ndarray]:
+    """`blocks` of the blocks of neighbouring candidates that `prepare` solves together
+    (`fem.core.inverse.local_blocks`), spread evenly over them, since the cost of a solve depends
+    on where its loads sit."""
+    from fem.core.inverse import local_blocks
+
+    every = local_blocks(xyz, block)
+    return [every[i] for i in np.linspace(0, len(every) - 1, blocks).astype(int)]
 
 
-def mumps_entries(upper, cols, rows, block: int, blocks: int, ooc: bool):
+def mumps_entries(upper, cols, rows, timed, ooc: bool):
     """MUMPS through `fem.core.inverse.InverseEntries`: (analysis and factorisation s, MUMPS's
     memory MB, factor non-zeros, seconds per candidate, entries (r, blocks * block) of the inverse
     at `rows` for the timed columns)."""
@@ -89,14 +94,14 @@ def mumps_entries(upper, cols, rows, block: int, blocks: int, ooc: bool):
     entries = InverseEntries(upper, out_of_core=ooc)
     factor_s = time.perf_counter() - t0
     out, solve_s = [], 0.0
-    for start in block_starts(len(cols), block, blocks):
+    for block in timed:
         t = time.perf_counter()
-        out.append(entries.block(rows, cols[start:start + block]))
+        out.append(entries.block(rows, cols[block]))
         solve_s += time.perf_counter() - t
-    return factor_s, entries.stats.memory, entries.stats.nonzeros, solve_s / (blocks * block), np.hstack(out)
+    return factor_s, entries.stats.memory, entries.stats.nonzeros, solve_s / sum(map(len, timed)), np.hstack(out)
 
 
-def pardiso_entries(model, free, nodes, rows, a, block: int, blocks: int):
+def pardiso_entries(model, free, nodes, rows, a, timed):
     """This project's path: (factorisation s, seconds per candidate, the same entries (r, blocks *
     block)) from `Model.system(condense=...)` and `LinearSystem.solve_condensed`."""
     from fem.io.modelfolder import held_regions
@@ -106,13 +111,13 @@ def pardiso_entries(model, free, nodes, rows, a, block: int, blocks: int):
     factor_s = time.perf_counter() - t0
     sign = float(np.sign(a[np.argmax(np.abs(a))]))       # a unit load along a: -1 on the y DOF for -y
     out, solve_s = [], 0.0
-    for start in block_starts(len(nodes), block, blocks):
+    for block in timed:
         t = time.perf_counter()
-        u = system.solve_condensed(nodes[start:start + block], a, check=False)
+        u = system.solve_condensed(nodes[block], a, check=False)
         solve_s += time.perf_counter() - t
         out.append(sign * u[free[rows]])
     model.release_factors()
-    return factor_s, solve_s / (blocks * block), np.hstack(out)
+    return factor_s, solve_s / sum(map(len, timed)), np.hstack(out)
 
 
 def main():
@@ -123,7 +128,7 @@ def main():
     ap.add_argument("--ooc", action="store_true", help="MUMPS out of core (factors on disk)")
     ap.add_argument("--no-write", action="store_true")
     args = ap.parse_args()
-    from fem.core.inverse import available
+    from fem.core.inverse import available, loaded_openblas_kernel
 
     if not available():                              # refused before any computation
         print("error: python-mumps is not installed: apt-get install libmumps-seq-dev libopenblas0-pthread, "
@@ -134,15 +139,16 @@ def main():
               file=sys.stderr)
         raise SystemExit(2)
 
-    model, free, upper, nodes, cols, rows, a = problem(args.model)
+    model, free, upper, nodes, cols, xyz, rows, a = problem(args.model)
     k = len(cols)
+    timed = timed_blocks(xyz, args.block, args.blocks)
     print(f"{args.model}: {upper.shape[0]:,} unknowns, {k:,} candidates, {len(rows):,} requested rows", flush=True)
-    m_f, m_mb, m_nnz, m_per, m_x = mumps_entries(upper, cols, rows, args.block, args.blocks, args.ooc)
+    m_f, m_mb, m_nnz, m_per, m_x = mumps_entries(upper, cols, rows, timed, args.ooc)
     m_peak = peak_gb()
     del upper
     print(f"MUMPS: factorisation {m_f:.1f} s ({m_mb} MB, {m_nnz / 1e6:.0f} M non-zeros), "
           f"{1e3 * m_per:.2f} ms per candidate, process peak {m_peak:.2f} GB", flush=True)
-    p_f, p_per, p_x = pardiso_entries(model, free, nodes, rows, a, args.block, args.blocks)
+    p_f, p_per, p_x = pardiso_entries(model, free, nodes, rows, a, timed)
     err = float(np.abs(m_x - p_x).max() / np.abs(p_x).max())
     print(f"PARDISO: factorisation with the Schur complement {p_f:.1f} s, {1e3 * p_per:.2f} ms per candidate; "
           f"largest difference {err:.1e}", flush=True)
@@ -150,7 +156,8 @@ def main():
              "|---|---|---|---|---|---|",
              f"| MUMPS 5.5 ({'out of core' if args.ooc else 'in core'}, `fem.core.inverse`) | "
              f"{m_f:.1f} | {1e3 * m_per:.2f} | {m_per * k:.0f} | {m_f + m_per * k:.0f} | "
-             f"{m_mb} MB, {m_nnz / 1e6:.0f} M non-zeros, process peak {m_peak:.2f} GB |",
+             f"{m_mb} MB, {m_nnz / 1e6:.0f} M non-zeros, process peak {m_peak:.2f} GB, "
+             f"OpenBLAS kernel {loaded_openblas_kernel()} |",
              f"| PARDISO (this project: Schur complement, backward substitutions) | {p_f:.1f} | {1e3 * p_per:.2f} | "
              f"{p_per * k:.0f} | {p_f + p_per * k:.0f} | |",
              "", f"Largest difference of the {m_x.size:,} entries compared, relative to the largest: {err:.1e}."]
@@ -167,8 +174,8 @@ def main():
 
 def what_was_timed(k: int, r: int, args) -> str:
     """One line on what was timed."""
-    return (f"{args.blocks} blocks of {args.block} of the {k:,} candidates timed (spread over them), {r:,} rows "
-            f"requested per candidate (the candidates and the receptor operators' unknowns); totals exclude "
+    return (f"{args.blocks} blocks of {args.block} neighbouring candidates of the {k:,} timed (spread over them), "
+            f"{r:,} rows requested per candidate (the candidates and the receptor operators' unknowns); totals exclude "
             f"rounding and writing.")
 
 

@@ -189,15 +189,10 @@ def build_response(model, approach, sampler, key: str, candidates=None, progress
                       shape=(model.ndof, m))
     axis = coordinate_axis(a[:model.dim])
     if axis is not None and model.ndof >= INVERSE_ENTRIES_FROM_DOFS and inverse.available():
-        reach, C, out = _by_inverse_entries(model, sn, candidates, a, axis, B, sampler, progress)
+        reach, WT, RT = _by_inverse_entries(model, sn, candidates, a, axis, B, sampler, progress)
     else:
-        reach, C, out = _by_schur_complement(model, sn, candidates, a, B, sampler, progress)
+        reach, WT, RT = _by_schur_complement(model, sn, candidates, a, B, sampler, progress)
     k = int(reach.sum())
-    WT = np.empty((k, m))
-    WT[:, reach], WT[:, ~reach] = C, out[:, :m - k]
-    del C
-    RT = np.ascontiguousarray(out[:, m - k:])
-    del out
     rm = ResponseModel(key, model.dim, a, reach, WT, RT, np.zeros(k), np.asarray(sampler.shift_mm, float),
                        np.asarray(sampler.lame_MPa, float))
     rm.exponents = {"WT": quantise(WT, rm.blocks["WT"], WT_REL), "RT": quantise(RT, rm.blocks["RT"], RT_REL)}
@@ -214,9 +209,9 @@ def _observed(reach, B, sampler) -> sp.csr_matrix:
 
 
 def _by_schur_complement(model, sn, candidates, a, B, sampler, progress):
-    """(reach (m,) bool, C (k, k) [mm/N], out (k, p)) of `build_response` by PARDISO: the compliance
-    from the Schur complement onto the condensed candidates, the outputs by backward substitutions
-    (or through the transposed system when there are fewer outputs than candidates)."""
+    """(reach (m,) bool, WT (k, m) [mm/N], RT (k, s)) of `build_response` by PARDISO: the compliance
+    from the Schur complement onto the condensed candidates, the other outputs by backward
+    substitutions (or through the transposed system when there are fewer outputs than candidates)."""
     with progress.task(f"response model: factorising {model.ndof} DOFs with {int(candidates.sum())} contact "
                        f"candidates condensed", kind=f"factorise-{model.dim}d",
                        size=model.ndof + 3 * int(candidates.sum())):
@@ -233,14 +228,17 @@ def _by_schur_complement(model, sn, candidates, a, B, sampler, progress):
     C = system.compliance(sn.nodes[reach], a)                       # symmetric: rows are columns
     del system
     model.release_factors()                 # the factorisation's memory (C stays): the rows are all it was for
-    return reach, C, out
+    WT = np.empty((k, m))
+    WT[:, reach], WT[:, ~reach] = C, out[:, :m - k]
+    del C
+    return reach, WT, np.ascontiguousarray(out[:, m - k:])
 
 
 def _by_inverse_entries(model, sn, candidates, a, axis, B, sampler, progress):
-    """`_by_schur_complement`'s (reach, C, out) by MUMPS (`fem.core.inverse`), for an approach along
-    the coordinate `axis`: per block of condensed candidates, the entries of K^-1 at the candidates
-    and at the unknowns the outputs read, the load a unit force along `a` on the candidate's
-    free DOF."""
+    """`_by_schur_complement`'s (reach, WT, RT) by MUMPS (`fem.core.inverse`), for an approach along
+    the coordinate `axis`: per block of neighbouring condensed candidates, the entries of K^-1 at the
+    candidates and at the unknowns the outputs read, the load a unit force along `a` on the
+    candidate's free DOF; the rows are written in place as each block arrives."""
     with progress.task(f"response model: factorising {model.ndof} DOFs (MUMPS)", kind=f"factorise-mumps-{model.dim}d",
                        size=model.ndof):
         free, upper = model.free_saddle(held_regions(model))
@@ -248,19 +246,22 @@ def _by_inverse_entries(model, sn, candidates, a, axis, B, sampler, progress):
         del upper
     along = sn.dofs[:, axis]
     reach = candidates & np.isin(along, free)
-    k = int(reach.sum())
+    k, m = int(reach.sum()), len(reach)
     outputs = _observed(reach, B, sampler)[:, free].tocsc()
     cols = np.searchsorted(free, along[reach])
     rows = np.union1d(np.flatnonzero(np.diff(outputs.indptr)), cols)
     read, at = outputs[:, rows].tocsr(), np.searchsorted(rows, cols)
-    C, out = np.empty((k, k)), np.empty((k, outputs.shape[0]))
+    within, others = np.flatnonzero(reach), np.flatnonzero(~reach)
+    WT, RT = np.empty((k, m)), np.empty((k, outputs.shape[0] - (m - k)))
     with progress.task(f"response model: entries of the inverse for {k} candidates at {len(rows)} unknowns"):
-        for s in range(0, k, inverse.RHS_BLOCK):
-            X = entries.block(rows, cols[s:s + inverse.RHS_BLOCK])      # K^-1 e_j: the unknown along the axis
-            C[:, s:s + X.shape[1]] = X[at]                              # a . u for u = a[axis] X: a[axis]^2 = 1
-            out[s:s + X.shape[1]] = (read @ (a[axis] * X)).T
+        for block in inverse.local_blocks(sn.x[reach], inverse.RHS_BLOCK):
+            XT = entries.block_t(rows, cols[block])             # row j: K^-1 e_j, e_j the unknown along the axis
+            WT[np.ix_(block, within)] = XT[:, at]               # a . u for u = a[axis] K^-1 e_j: a[axis]^2 = 1
+            observed = a[axis] * (read @ XT.T).T
+            WT[np.ix_(block, others)] = observed[:, :m - k]
+            RT[block] = observed[:, m - k:]
     entries.release()
-    return reach, C, out
+    return reach, WT, RT
 
 
 def _apply_inverse(system, loads, observe) -> np.ndarray:

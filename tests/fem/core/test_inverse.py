@@ -19,3 +19,47 @@ def test_entries_of_the_inverse_of_a_saddle_matrix():
     rows, cols = np.array([0, 3, 7, 20, 41, 50]), np.array([33, 2, 45, 7])
     got = inverse.InverseEntries(saddle_upper(Kdev, B, D)).block(rows, cols)
     np.testing.assert_allclose(got, np.linalg.inv(A)[np.ix_(rows, cols)], rtol=0, atol=1e-12 * np.abs(got).max())
+
+
+def test_columns_in_any_order_and_the_transposed_layout():
+    rng = np.random.default_rng(3)
+    n = 30
+    M = sp.random(n, n, density=0.2, random_state=4)
+    A = (M @ M.T + 3 * sp.eye(n)).tocsr()
+    entries = inverse.InverseEntries(sp.triu(A).tocsr())
+    rows = np.sort(rng.choice(n, 9, replace=False))
+    dense = np.linalg.inv(A.toarray())
+    for cols in (np.array([4, 1, 29, 17]), np.array([1, 4, 17, 29]), np.array([8])):
+        got = entries.block_t(rows, cols)
+        assert got.shape == (len(cols), len(rows)) and got.flags.c_contiguous
+        np.testing.assert_allclose(got, dense[np.ix_(rows, cols)].T, rtol=0, atol=1e-12 * np.abs(dense).max())
+    np.testing.assert_array_equal(entries.block(rows, cols), entries.block_t(rows, cols).T)
+
+
+def test_local_blocks_partition_the_points_into_compact_blocks():
+    x, y = np.meshgrid(np.arange(40.0), np.arange(25.0))
+    pts = np.c_[x.ravel(), y.ravel()][np.random.default_rng(5).permutation(1000)]
+    blocks = inverse.local_blocks(pts, 128)
+    assert [len(b) for b in blocks] == [128] * 7 + [104]                  # whole blocks first
+    np.testing.assert_array_equal(np.sort(np.concatenate(blocks)), np.arange(1000))
+    # each block is a patch: its extent is a fraction of the whole (40 x 25), not a random sample
+    assert max(np.ptp(pts[b], axis=0).max() for b in blocks) <= 13
+    assert [b.tolist() for b in inverse.local_blocks(pts, 128)] == [b.tolist() for b in blocks]
+
+
+def test_openblas_kernel_from_the_processor_flags():
+    avx512 = {"avx512f", "avx512dq", "avx512cd", "avx512bw", "avx512vl", "avx2", "fma", "sse4_2"}
+    assert inverse.openblas_kernel(avx512) == "SkylakeX"
+    assert inverse.openblas_kernel({"avx", "avx2", "fma", "avx512f"}) == "Haswell"
+    assert inverse.openblas_kernel({"sse2", "sse4_2", "avx"}) is None
+
+
+def test_the_system_openblas_runs_the_kernel_the_processor_allows():
+    """On a processor with AVX2 the OpenBLAS that MUMPS loaded must not have fallen back to its
+    Prescott (SSE3) kernel (the module docstring: 9 times slower dense products)."""
+    name = inverse.loaded_openblas_kernel()
+    if name is None:
+        pytest.skip("MUMPS loaded no system OpenBLAS")
+    if inverse.openblas_kernel(inverse._cpu_flags()) is None:
+        pytest.skip("the processor has neither AVX2 nor AVX-512")
+    assert name.lower() != "prescott", name
