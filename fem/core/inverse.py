@@ -1,9 +1,9 @@
 """Entries of the inverse of a sparse symmetric matrix by MUMPS (ICNTL(30)), for the stored
 response models (`fem.experiments.response`): a factorisation with no ordering constraint, then
 per block of unit right-hand sides a forward substitution pruned to their paths and a backward one
-stopped at the rows asked for. On the human 0.5 mm model's whole pad: factorisation and entries
-133 s against about 200 s for PARDISO's Schur complement and backward substitutions
-(docs/indentation.md, benchmarks/prepare_mumps.py).
+stopped at the rows asked for. The whole `prepare` command on the human 0.5 mm model: 141 s against
+191-214 s with PARDISO's Schur complement and backward substitutions on one machine, 203-228 s
+against 339 s on a slower one (docs/indentation.md, benchmarks/prepare_mumps.py).
 
 Optional: python-mumps over the system's MUMPS library (Debian: libmumps-seq-dev; PyPI has
 python-mumps only as a source package that builds against it). Without it `available()` is False
