@@ -19,10 +19,13 @@ for themselves).
 """
 from __future__ import annotations
 
+import functools
 import os
 
 import numpy as np
 import scipy.sparse as sp
+
+from fem.core.longcalls import interruptible
 
 ORDERING = "scotch"
 """The fill-reducing ordering: the best of Debian's build (no METIS) on the human 0.5 mm model
@@ -83,6 +86,11 @@ def loaded_openblas_kernel() -> str | None:
         return None
 
 
+_ABANDONED: list = []
+"""MUMPS instances whose call Ctrl-C abandoned: the call runs on in the long-call thread, and
+python-mumps would end the instance (JOB = -2) under it if it were collected."""
+
+
 def available() -> bool:
     """Whether python-mumps and its library load."""
     try:
@@ -119,12 +127,22 @@ class InverseEntries:
         self.n = upper.shape[0]
         self._ctx = mumps.Context()
         self._ctx.set_matrix(sp.coo_matrix(upper), symmetric=True)
-        self._ctx.analyze(ordering=ORDERING)
-        self._ctx.factor(reuse_analysis=True, ooc=out_of_core)
+        self._long(functools.partial(self._ctx.analyze, ordering=ORDERING))
+        self._long(functools.partial(self._ctx.factor, reuse_analysis=True, ooc=out_of_core))
         self.stats = self._ctx.factor_stats
         inst = self._ctx.mumps_instance
         inst.icntl[27], inst.icntl[30], inst.icntl[20] = RHS_BLOCK, 1, 1     # blocking; entries of A^-1; sparse
         self._rows = self._ind = None
+
+    def _long(self, call, *args, keep=()):
+        """call(*args) `interruptible`: MUMPS releases Python's lock, so Ctrl-C acts within a
+        fraction of a second, inside the factorisation too; an abandoned call keeps its instance
+        and the arrays it works in (`keep`)."""
+        try:
+            return interruptible(call, *args)
+        except KeyboardInterrupt:
+            _ABANDONED.append((self._ctx, keep))
+            raise
 
     def block(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
         """(len(rows), len(cols)) A^-1[rows][:, cols]: rows (r,) sorted unique, cols (c,) unique
@@ -148,7 +166,7 @@ class InverseEntries:
         inst = self._ctx.mumps_instance
         inst.set_sparse_rhs(ptr, ind, values)
         inst.job = 3
-        self._ctx.call()
+        self._long(self._ctx.call, keep=(ptr, ind, values))
         out = values.reshape(len(cols), len(rows))          # by increasing column
         return out if np.all(np.diff(cols) > 0) else out[np.argsort(order)]
 

@@ -1,10 +1,12 @@
 """Long library calls that Ctrl-C can interrupt: `interruptible(call, *args)` runs call on one
-thread kept for the life of the process while the main thread waits in short steps."""
+thread kept for the life of the process while the main thread waits in short steps. A process
+that stops on Ctrl-C ends through `end_interrupted`, which does not wait for a call it abandoned."""
 from __future__ import annotations
 
 import functools
 import os
 import queue
+import sys
 import threading
 
 WAIT_S = 0.1
@@ -50,8 +52,28 @@ def interruptible(call, *args):
         return call(*args)
     box, done = {}, threading.Event()
     _long_calls().put((call, args, box, done))
-    while not done.wait(WAIT_S):
-        pass
+    try:
+        while not done.wait(WAIT_S):
+            pass
+    except KeyboardInterrupt:
+        _abandoned.append(done)
+        raise
     if "error" in box:
         raise box["error"]
     return box.get("value")
+
+
+_abandoned: list[threading.Event] = []
+"""The completion events of the calls `interruptible` gave up waiting for."""
+
+
+def end_interrupted(status: int) -> int:
+    """The exit status of a process that Ctrl-C stopped, returned as is when no abandoned call
+    still runs; otherwise the process ends here, its output flushed (os._exit): a normal exit runs
+    the libraries' destructors, and OpenBLAS's joins the threads of the call that still runs in
+    them (measured with MUMPS: the process hung until killed)."""
+    if any(not done.is_set() for done in _abandoned):
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(status)
+    return status

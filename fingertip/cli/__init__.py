@@ -20,6 +20,7 @@ import sys
 import traceback
 from pathlib import Path
 
+from fem.core.longcalls import end_interrupted
 from fingertip.cli.options import UNSET, Parser
 from fingertip.errors import InputError
 
@@ -158,7 +159,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     except KeyboardInterrupt as exc:
         print(f"error: interrupted; {_kept(args)}", file=sys.stderr)
-        return 143 if isinstance(exc, Terminated) else 130
+        return end_interrupted(143 if isinstance(exc, Terminated) else 130)
     except Exception as exc:  # noqa: BLE001 - the last resort: one line, not a traceback
         if os.environ.get(DEBUG_ENV):
             traceback.print_exc()

@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 import pipeline
-from tests.helpers import default_sigint, ROOT, cli, snapshot
+from fem.core import inverse
+from tests.helpers import ROOT, cli, default_sigint, snapshot
 
 DATA = ROOT / "data"
 REFUSAL_S = 2.0          # the issue's bound on a refusal: no meshing or factorising before it
@@ -392,9 +393,10 @@ def test_interrupted_reproduce_says_what_it_keeps(tmp_path, monkeypatch):
 
 @pytest.mark.slow
 def test_ctrl_c_while_factorising_acts_within_a_second(tmp_path):
-    """Ctrl-C while PARDISO factorises (monkey preset at 1 mm, 68k DOFs: several seconds of
-    factorisation) ends the command within about a second, with the one interrupt line; a depth
-    beyond the tissue over the bone (2.7 mm here) is refused before the factorisation."""
+    """Ctrl-C while the first `indent` factorises for its response model (monkey preset at 1 mm,
+    68k DOFs: several seconds; MUMPS where python-mumps is installed, else PARDISO) ends the
+    command within about a second, with the one interrupt line; a depth beyond the tissue over the
+    bone (2.7 mm here) is refused before the factorisation."""
     import select
 
     model = tmp_path / "monkey"
@@ -417,5 +419,6 @@ def test_ctrl_c_while_factorising_acts_within_a_second(tmp_path):
     seconds = time.perf_counter() - t0
     assert proc.returncode == 130, err
     assert err.decode().strip().splitlines()[-1] == "error: interrupted; nothing was written"
+    assert (b"DOFs (MUMPS)" in seen + err) == inverse.available(), seen + err
     assert seconds < 1.5, seconds                            # it took 4-21 s while PARDISO ran on
     assert not out.exists() and not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
