@@ -48,6 +48,7 @@ def openblas_kernel(flags) -> str | None:
 
 
 def _cpu_flags() -> set:
+    """The first processor's flags in /proc/cpuinfo (empty where there is none)."""
     try:
         with open("/proc/cpuinfo") as f:
             return next((set(line.split(":", 1)[1].split()) for line in f if line.startswith("flags")), set())
