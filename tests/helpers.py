@@ -154,3 +154,14 @@ def quarter_block(nu, fine_mm, size_mm, E_MPa=1.0):
     regions = {"top": r["ymax"], "bottom": r["ymin"], "symx": r["xmin"], "symz": r["zmin"]}
     return (Model(p, cells, np.ones(len(cells), int), regions, material=[E_MPa], nu=nu),
             {"bottom": 0.0, "symx": (0.0, None, None), "symz": (None, None, 0.0)})
+
+
+def laplacian_3d(n: int):
+    """(n^3, n^3) scipy CSR: the 7-point finite-difference Laplacian of an n x n x n grid
+    (symmetric positive definite)."""
+    import scipy.sparse as sp
+
+    line = sp.diags([-np.ones(n - 1), 2 * np.ones(n), -np.ones(n - 1)], [-1, 0, 1])
+    eye = sp.eye(n)
+    return (sp.kron(sp.kron(line, eye), eye) + sp.kron(sp.kron(eye, line), eye)
+            + sp.kron(sp.kron(eye, eye), line)).tocsr()

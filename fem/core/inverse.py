@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import functools
 import os
+import sys
 
 import numpy as np
 import scipy.sparse as sp
@@ -59,8 +60,6 @@ def _cpu_flags() -> set:
 def _mumps():
     """The python-mumps module, imported with OPENBLAS_CORETYPE set for the load of the system's
     OpenBLAS (module docstring) and the environment restored after."""
-    import sys
-
     if "mumps" in sys.modules or "OPENBLAS_CORETYPE" in os.environ:
         import mumps
         return mumps
@@ -85,11 +84,6 @@ def loaded_openblas_kernel() -> str | None:
         return lib.openblas_get_corename().decode()
     except (OSError, AttributeError):
         return None
-
-
-_ABANDONED: list = []
-"""MUMPS instances whose call Ctrl-C abandoned: the call runs on in the long-call thread, and
-python-mumps would end the instance (JOB = -2) under it if it were collected."""
 
 
 def available() -> bool:
@@ -117,33 +111,35 @@ def local_blocks(points: np.ndarray, size: int) -> list[np.ndarray]:
     return cut(np.arange(len(points)))
 
 
+def _solve_sparse(ctx, ptr, ind, values) -> None:
+    """MUMPS's solve for the sparse right-hand sides (ptr, ind), the answers written into values.
+    Run `interruptible`, whose thread holds the arguments until the call ends: python-mumps keeps
+    no reference to the arrays MUMPS writes into."""
+    inst = ctx.mumps_instance
+    inst.set_sparse_rhs(ptr, ind, values)
+    inst.job = 3
+    ctx.call()
+
+
 class InverseEntries:
     """A^-1 restricted to given rows and columns, for A (n, n) sparse symmetric (indefinite allowed)
     given by its upper triangle, factorised once (LDL^T with pivoting), in core or with the factor
     on disk (`out_of_core`: on the human 0.5 mm model 3.1 GB peak instead of 5.5 GB, 1.7 times the
-    time). `stats`: MUMPS's factorisation statistics (memory MB, non-zeros)."""
+    time). `stats`: MUMPS's factorisation statistics (memory MB, non-zeros). MUMPS releases
+    Python's lock, so its calls run `interruptible`: Ctrl-C acts within a fraction of a second,
+    inside the factorisation too."""
 
     def __init__(self, upper: sp.spmatrix, out_of_core: bool = False):
         mumps = _mumps()
         self.n = upper.shape[0]
         self._ctx = mumps.Context()
         self._ctx.set_matrix(sp.coo_matrix(upper), symmetric=True)
-        self._long(functools.partial(self._ctx.analyze, ordering=ORDERING))
-        self._long(functools.partial(self._ctx.factor, reuse_analysis=True, ooc=out_of_core))
+        interruptible(functools.partial(self._ctx.analyze, ordering=ORDERING))
+        interruptible(functools.partial(self._ctx.factor, reuse_analysis=True, ooc=out_of_core))
         self.stats = self._ctx.factor_stats
         inst = self._ctx.mumps_instance
         inst.icntl[27], inst.icntl[30], inst.icntl[20] = RHS_BLOCK, 1, 1     # blocking; entries of A^-1; sparse
         self._rows = self._ind = None
-
-    def _long(self, call, *args, keep=()):
-        """call(*args) `interruptible`: MUMPS releases Python's lock, so Ctrl-C acts within a
-        fraction of a second, inside the factorisation too; an abandoned call keeps its instance
-        and the arrays it works in (`keep`)."""
-        try:
-            return interruptible(call, *args)
-        except KeyboardInterrupt:
-            _ABANDONED.append((self._ctx, keep))
-            raise
 
     def block(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
         """(len(rows), len(cols)) A^-1[rows][:, cols]: rows (r,) sorted unique, cols (c,) unique
@@ -164,10 +160,7 @@ class InverseEntries:
         ptr = (np.r_[0, np.cumsum(counts)] + 1).astype(_mumps.int_dtype)
         ind = np.tile(self._ind, len(cols))
         values = np.zeros(len(ind))
-        inst = self._ctx.mumps_instance
-        inst.set_sparse_rhs(ptr, ind, values)
-        inst.job = 3
-        self._long(self._ctx.call, keep=(ptr, ind, values))
+        interruptible(_solve_sparse, self._ctx, ptr, ind, values)
         out = values.reshape(len(cols), len(rows))          # by increasing column
         return out if np.all(np.diff(cols) > 0) else out[np.argsort(order)]
 

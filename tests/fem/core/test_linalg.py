@@ -10,7 +10,7 @@ import scipy.sparse as sp
 from fem.core.linalg import Pardiso, SaddleFactor, blas_threads, solve_refined
 from fem.core.model import Model
 from fem.verify import closed_forms as ref
-from tests.helpers import ROOT
+from tests.helpers import ROOT, laplacian_3d
 
 
 def _saddle(n=40, m=12, seed=0):
@@ -169,15 +169,6 @@ def test_factorisations_leave_the_environment_unchanged():
         SaddleFactor(K, B, D)(np.ones(K.shape[0]))
         solve_refined(A, b)
     assert dict(os.environ) == before
-
-
-def laplacian_3d(n: int) -> sp.csr_matrix:
-    """(n^3, n^3) the 7-point finite-difference Laplacian of an n x n x n grid (symmetric positive
-    definite)."""
-    line = sp.diags([-np.ones(n - 1), 2 * np.ones(n), -np.ones(n - 1)], [-1, 0, 1])
-    eye = sp.eye(n)
-    return (sp.kron(sp.kron(line, eye), eye) + sp.kron(sp.kron(eye, line), eye)
-            + sp.kron(sp.kron(eye, eye), line)).tocsr()
 
 
 def test_pardiso_runs_in_mkls_reproducible_mode():
